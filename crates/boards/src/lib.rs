@@ -1,0 +1,2 @@
+//! Finger-board drivers (being written).
+#![no_std]

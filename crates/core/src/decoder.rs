@@ -1,0 +1,394 @@
+//! The MIDI 1.0 stream decoder: bytes in, [`Message`]s out, exactly by the specification.
+//!
+//! The rules it follows (MIDI 1.0 Detailed Specification, "Running Status", "System
+//! Real-Time Messages" and "Data Types"):
+//!
+//! - Running status applies to channel voice messages (0x80..=0xEF). System Exclusive and
+//!   System Common status bytes (0xF0..=0xF7) cancel it; real-time bytes (0xF8..=0xFF) do not.
+//! - A real-time byte may arrive anywhere, even between the data bytes of a message or inside
+//!   a System Exclusive message. It is emitted at once and the interrupted message continues.
+//! - 0xF4 and 0xF5 are undefined: ignored, and they cancel running status. 0xF9 and 0xFD are
+//!   undefined real-time bytes: ignored with no other effect.
+//! - A data byte with no status to attach to is dropped (counted in [`Counters::dropped`]).
+//! - A status byte other than real-time that arrives before the current message is complete
+//!   abandons it: nothing is emitted for it and [`Counters::abandoned`] counts it once.
+//! - Any status byte other than real-time ends a System Exclusive message. One ended that way
+//!   is still emitted, with `terminated: false`. A lone 0xF7 is ignored.
+//! - A stream that ends inside a message emits nothing for it.
+
+use crate::message::Message;
+use crate::values::{Channel, Note, Velocity, U14, U7};
+
+/// What the decoder has seen, for a builder who wants to know whether the line is noisy.
+///
+/// Counts wrap at 2³² (about 16 days of a saturated DIN line).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Bytes fed in.
+    pub bytes: u32,
+    /// Messages emitted ([`Message::SysExStart`] notifications are not counted).
+    pub messages: u32,
+    /// Data bytes dropped because no status byte was in force.
+    pub dropped: u32,
+    /// Messages abandoned because a status byte arrived before they were complete.
+    pub abandoned: u32,
+}
+
+/// Up to two messages produced by one byte.
+///
+/// Most bytes produce none or one. A status byte that ends a System Exclusive message can
+/// produce two: the end of the SysEx, then its own message (a Tune Request, or the
+/// [`Message::SysExStart`] of a new SysEx).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Decoded {
+    slots: [Option<Message>; 2],
+    next: u8,
+}
+
+impl Decoded {
+    fn push(&mut self, message: Message) {
+        let slot = if self.slots[0].is_none() { 0 } else { 1 };
+        self.slots[slot] = Some(message);
+    }
+}
+
+impl Iterator for Decoded {
+    type Item = Message;
+    fn next(&mut self) -> Option<Message> {
+        while (self.next as usize) < self.slots.len() {
+            let slot = self.slots[self.next as usize].take();
+            self.next += 1;
+            if slot.is_some() {
+                return slot;
+            }
+        }
+        None
+    }
+}
+
+/// A MIDI 1.0 byte-stream decoder: `no_std`, allocation-free, 20 bytes of state plus the
+/// optional System Exclusive buffer of `SYSEX` bytes.
+///
+/// With `SYSEX > 0`, the first `SYSEX` data bytes of the latest System Exclusive message are
+/// kept and can be read with [`Decoder::sysex_data`] once [`Message::SysEx`] is emitted.
+/// [`Message::SysEx::len`](Message::SysEx) always gives the full length.
+#[derive(Clone, Debug)]
+pub struct Decoder<const SYSEX: usize = 0> {
+    /// Status byte of the message being collected or of the running status; 0 when none.
+    status: u8,
+    /// Data bytes collected so far for the current message.
+    data: [u8; 2],
+    /// How many of `data` are filled.
+    have: u8,
+    /// A message has begun (status or first running-status data byte) and is not complete.
+    pending: bool,
+    /// Inside a System Exclusive message.
+    in_sysex: bool,
+    sysex_len: u32,
+    sysex: [u8; SYSEX],
+    counters: Counters,
+}
+
+impl<const SYSEX: usize> Default for Decoder<SYSEX> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// How many data bytes follow `status`, for statuses that take data.
+const fn data_len(status: u8) -> u8 {
+    match status & 0xF0 {
+        0xC0 | 0xD0 => 1,
+        0x80 | 0x90 | 0xA0 | 0xB0 | 0xE0 => 2,
+        _ => match status {
+            0xF1 | 0xF3 => 1,
+            0xF2 => 2,
+            _ => 0,
+        },
+    }
+}
+
+impl<const SYSEX: usize> Decoder<SYSEX> {
+    /// A decoder with no status in force.
+    pub const fn new() -> Self {
+        Self {
+            status: 0,
+            data: [0; 2],
+            have: 0,
+            pending: false,
+            in_sysex: false,
+            sysex_len: 0,
+            sysex: [0; SYSEX],
+            counters: Counters {
+                bytes: 0,
+                messages: 0,
+                dropped: 0,
+                abandoned: 0,
+            },
+        }
+    }
+
+    /// The counters so far.
+    pub const fn counters(&self) -> Counters {
+        self.counters
+    }
+
+    /// Whether a System Exclusive message is being received.
+    pub const fn in_sysex(&self) -> bool {
+        self.in_sysex
+    }
+
+    /// The stored start of the latest System Exclusive message: at most `SYSEX` bytes.
+    pub fn sysex_data(&self) -> &[u8] {
+        let n = (self.sysex_len as usize).min(SYSEX);
+        &self.sysex[..n]
+    }
+
+    /// Forgets any message in progress and the running status, as after power-up.
+    /// The counters are kept.
+    pub fn reset(&mut self) {
+        let counters = self.counters;
+        *self = Self::new();
+        self.counters = counters;
+    }
+
+    /// Feeds every byte of `bytes`, calling `emit` for each message in order.
+    pub fn push_slice(&mut self, bytes: &[u8], mut emit: impl FnMut(Message)) {
+        for &byte in bytes {
+            for message in self.push(byte) {
+                emit(message);
+            }
+        }
+    }
+
+    /// Feeds one byte and returns the messages it completes.
+    pub fn push(&mut self, byte: u8) -> Decoded {
+        self.counters.bytes = self.counters.bytes.wrapping_add(1);
+        let mut out = Decoded::default();
+        if byte >= 0xF8 {
+            if let Some(message) = realtime(byte) {
+                self.emit(&mut out, message);
+            }
+        } else if byte >= 0x80 {
+            self.status_byte(byte, &mut out);
+        } else {
+            self.data_byte(byte, &mut out);
+        }
+        out
+    }
+
+    fn emit(&mut self, out: &mut Decoded, message: Message) {
+        if message != Message::SysExStart {
+            self.counters.messages = self.counters.messages.wrapping_add(1);
+        }
+        out.push(message);
+    }
+
+    fn status_byte(&mut self, byte: u8, out: &mut Decoded) {
+        if self.in_sysex {
+            self.in_sysex = false;
+            let terminated = byte == 0xF7;
+            self.emit(
+                out,
+                Message::SysEx {
+                    len: self.sysex_len,
+                    terminated,
+                },
+            );
+            if terminated {
+                return;
+            }
+        } else if self.pending {
+            self.counters.abandoned = self.counters.abandoned.wrapping_add(1);
+        }
+        self.pending = false;
+        self.have = 0;
+        self.status = 0;
+        match byte {
+            0x80..=0xEF | 0xF1..=0xF3 => {
+                self.status = byte;
+                self.pending = true;
+            }
+            0xF0 => {
+                self.in_sysex = true;
+                self.sysex_len = 0;
+                self.emit(out, Message::SysExStart);
+            }
+            0xF6 => self.emit(out, Message::TuneRequest),
+            // 0xF4, 0xF5 (undefined) and a lone 0xF7: ignored, running status cancelled.
+            _ => {}
+        }
+    }
+
+    fn data_byte(&mut self, byte: u8, out: &mut Decoded) {
+        if self.in_sysex {
+            if let Some(slot) = self.sysex.get_mut(self.sysex_len as usize) {
+                *slot = byte;
+            }
+            self.sysex_len = self.sysex_len.saturating_add(1);
+            return;
+        }
+        if self.status == 0 {
+            self.counters.dropped = self.counters.dropped.wrapping_add(1);
+            return;
+        }
+        self.pending = true;
+        self.data[self.have as usize] = byte;
+        self.have += 1;
+        if self.have < data_len(self.status) {
+            return;
+        }
+        self.have = 0;
+        self.pending = false;
+        let message = complete(self.status, self.data);
+        if self.status >= 0xF0 {
+            // System Common messages have no running status.
+            self.status = 0;
+        }
+        self.emit(out, message);
+    }
+}
+
+fn realtime(byte: u8) -> Option<Message> {
+    Some(match byte {
+        0xF8 => Message::Clock,
+        0xFA => Message::Start,
+        0xFB => Message::Continue,
+        0xFC => Message::Stop,
+        0xFE => Message::ActiveSensing,
+        0xFF => Message::Reset,
+        // 0xF9 and 0xFD are undefined.
+        _ => return None,
+    })
+}
+
+fn complete(status: u8, data: [u8; 2]) -> Message {
+    let channel = Channel::from_status(status);
+    let [a, b] = data;
+    match status & 0xF0 {
+        0x80 => Message::NoteOff {
+            channel,
+            note: Note::from_bits(a),
+            velocity: Velocity::from_bits(b),
+        },
+        0x90 => Message::NoteOn {
+            channel,
+            note: Note::from_bits(a),
+            velocity: Velocity::from_bits(b),
+        },
+        0xA0 => Message::PolyPressure {
+            channel,
+            note: Note::from_bits(a),
+            pressure: U7::from_bits(b),
+        },
+        0xB0 => Message::ControlChange {
+            channel,
+            controller: U7::from_bits(a),
+            value: U7::from_bits(b),
+        },
+        0xC0 => Message::ProgramChange {
+            channel,
+            program: U7::from_bits(a),
+        },
+        0xD0 => Message::ChannelPressure {
+            channel,
+            pressure: U7::from_bits(a),
+        },
+        0xE0 => Message::PitchBend {
+            channel,
+            value: U14::from_lsb_msb(a, b),
+        },
+        _ => match status {
+            0xF1 => Message::QuarterFrame(U7::from_bits(a)),
+            0xF2 => Message::SongPosition(U14::from_lsb_msb(a, b)),
+            _ => Message::SongSelect(U7::from_bits(a)),
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn decode(bytes: &[u8]) -> ([Option<Message>; 16], Counters) {
+        let mut d = Decoder::<0>::new();
+        let mut out = [None; 16];
+        let mut n = 0;
+        d.push_slice(bytes, |m| {
+            out[n] = Some(m);
+            n += 1;
+        });
+        (out, d.counters())
+    }
+
+    #[test]
+    fn system_common_cancels_running_status() {
+        let (out, c) = decode(&[0x90, 60, 1, 0xF3, 5, 61, 2]);
+        assert_eq!(out[1], Some(Message::SongSelect(U7::from_bits(5))));
+        assert_eq!(out[2], None);
+        assert_eq!(c.dropped, 2);
+    }
+
+    #[test]
+    fn undefined_f4_cancels_running_status_but_f9_does_not() {
+        let (_, c) = decode(&[0x90, 60, 1, 0xF4, 61, 2]);
+        assert_eq!((c.messages, c.dropped), (1, 2));
+        let (_, c) = decode(&[0x90, 60, 1, 0xF9, 61, 2]);
+        assert_eq!((c.messages, c.dropped), (2, 0));
+    }
+
+    #[test]
+    fn status_in_the_middle_abandons_once() {
+        let (out, c) = decode(&[0x90, 60, 0x80, 60, 0]);
+        assert_eq!(c.abandoned, 1);
+        assert!(matches!(out[0], Some(Message::NoteOff { .. })));
+    }
+
+    #[test]
+    fn sysex_cut_by_status_is_emitted_unterminated_then_the_status_is_used() {
+        let mut d = Decoder::<4>::new();
+        let mut got = [None; 4];
+        let mut n = 0;
+        d.push_slice(&[0xF0, 1, 2, 3, 4, 5, 0x90, 60, 100], |m| {
+            got[n] = Some(m);
+            n += 1;
+        });
+        assert_eq!(got[0], Some(Message::SysExStart));
+        assert_eq!(
+            got[1],
+            Some(Message::SysEx {
+                len: 5,
+                terminated: false
+            })
+        );
+        assert!(matches!(got[2], Some(Message::NoteOn { .. })));
+        assert_eq!(d.sysex_data(), &[1, 2, 3, 4]);
+        assert_eq!(d.counters().abandoned, 0);
+    }
+
+    #[test]
+    fn one_byte_can_end_a_sysex_and_start_another() {
+        let got: [Option<Message>; 2] = {
+            let mut d = Decoder::<0>::new();
+            d.push(0xF0);
+            d.push(1);
+            let mut it = d.push(0xF0);
+            [it.next(), it.next()]
+        };
+        assert_eq!(
+            got[0],
+            Some(Message::SysEx {
+                len: 1,
+                terminated: false
+            })
+        );
+        assert_eq!(got[1], Some(Message::SysExStart));
+    }
+
+    #[test]
+    fn lone_eox_is_ignored() {
+        let (out, c) = decode(&[0xF7, 0xF7]);
+        assert_eq!(out[0], None);
+        assert_eq!((c.bytes, c.messages, c.dropped, c.abandoned), (2, 0, 0, 0));
+    }
+}

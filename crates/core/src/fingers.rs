@@ -1,0 +1,124 @@
+//! Per-key physical state: which fingers are down, waiting or resting, since when.
+//!
+//! This is the safety guard's memory. Each key is in one of four phases:
+//!
+//! ```text
+//!            press (gap passed)             release
+//!   Ready ───────────────────────▶ Down ───────────────▶ Releasing ──(gap passes)──▶ Ready
+//!                                   ▲                        │
+//!                                   │ gap passes             │ press before the gap has passed
+//!                                   └────── Pending ◀────────┘
+//! ```
+//!
+//! Times are kept per key as the low 32 bits of the microsecond clock (4 bytes a key instead
+//! of 8). An age is `now − stamp` in wrapping arithmetic; ages are clamped to [`AGE_CAP`]
+//! (35 minutes) before they could wrap, which is safe because every guard limit is at most
+//! 30 minutes ([`MAX_LIMIT`](crate::MAX_LIMIT)).
+
+use crate::time::Instant;
+
+/// The age every stamp is clamped to: 2³¹ µs, about 35.8 minutes.
+pub(crate) const AGE_CAP: u32 = 1 << 31;
+
+pub(crate) const READY: u8 = 0;
+pub(crate) const RELEASING: u8 = 1;
+pub(crate) const PENDING: u8 = 2;
+pub(crate) const DOWN: u8 = 3;
+const PHASE: u8 = 0b11;
+/// The key is held by the sustain pedal.
+pub(crate) const SUSTAINED: u8 = 0b100;
+/// The note waiting in `PENDING` was folded.
+pub(crate) const FOLDED: u8 = 0b1000;
+
+/// Physical state of `K` keys: 6 bytes a key.
+#[derive(Clone, Debug)]
+pub(crate) struct Fingers<const K: usize> {
+    flags: [u8; K],
+    stamp: [u32; K],
+    velocity: [u8; K],
+    /// Keys in `DOWN`.
+    pub down: u8,
+    /// Keys in `PENDING`.
+    pub pending: u8,
+}
+
+impl<const K: usize> Fingers<K> {
+    pub const fn new() -> Self {
+        Self {
+            flags: [READY; K],
+            stamp: [0; K],
+            velocity: [0; K],
+            down: 0,
+            pending: 0,
+        }
+    }
+
+    pub fn phase(&self, key: u8) -> u8 {
+        self.flags[key as usize] & PHASE
+    }
+
+    pub fn has(&self, key: u8, flag: u8) -> bool {
+        self.flags[key as usize] & flag != 0
+    }
+
+    pub fn set_flag(&mut self, key: u8, flag: u8, on: bool) {
+        if on {
+            self.flags[key as usize] |= flag;
+        } else {
+            self.flags[key as usize] &= !flag;
+        }
+    }
+
+    pub fn velocity(&self, key: u8) -> u8 {
+        self.velocity[key as usize]
+    }
+
+    /// Microseconds since the key's stamp, at most [`AGE_CAP`].
+    pub fn age(&self, key: u8, now: Instant) -> u32 {
+        now.low32()
+            .wrapping_sub(self.stamp[key as usize])
+            .min(AGE_CAP)
+    }
+
+    /// Moves `key` to `phase`, stamped `now`, keeping the down/pending counts.
+    pub fn enter(&mut self, key: u8, phase: u8, now: Instant) {
+        self.set_phase(key, phase);
+        self.stamp[key as usize] = now.low32();
+    }
+
+    /// Moves `key` to `phase` without touching its stamp.
+    pub fn set_phase(&mut self, key: u8, phase: u8) {
+        let k = key as usize;
+        match self.flags[k] & PHASE {
+            DOWN => self.down -= 1,
+            PENDING => self.pending -= 1,
+            _ => {}
+        }
+        match phase {
+            DOWN => self.down += 1,
+            PENDING => self.pending += 1,
+            _ => {}
+        }
+        let keep = if phase == DOWN || phase == PENDING {
+            self.flags[k] & (SUSTAINED | FOLDED)
+        } else {
+            0
+        };
+        self.flags[k] = phase | keep;
+    }
+
+    pub fn set_velocity(&mut self, key: u8, velocity: u8) {
+        self.velocity[key as usize] = velocity;
+    }
+
+    /// Clamps every stamp older than [`AGE_CAP`], so that no age can wrap. With `all`, every
+    /// stamp is taken as at least that old (the clock jumped by more than the cap).
+    pub fn clamp_ages(&mut self, now: Instant, all: bool) {
+        let floor = now.low32().wrapping_sub(AGE_CAP);
+        for stamp in self.stamp.iter_mut() {
+            if all || now.low32().wrapping_sub(*stamp) >= AGE_CAP {
+                *stamp = floor;
+            }
+        }
+    }
+}

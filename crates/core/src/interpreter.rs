@@ -1,0 +1,522 @@
+//! The interpreter: decoded messages and the current time in, finger frames out.
+
+use crate::config::{Config, ConfigError};
+use crate::decoder::{Counters, Decoder};
+use crate::fingers::{Fingers, AGE_CAP, DOWN, FOLDED, PENDING, READY, RELEASING, SUSTAINED};
+use crate::frame::{FingerFrame, FlushError};
+use crate::message::Message;
+use crate::output::FingerBoards;
+use crate::stats::Stats;
+use crate::time::{Duration, Instant};
+use crate::values::{Channel, Note, Velocity};
+
+/// The specification's Active Sensing timeout: 300 ms.
+pub const ACTIVE_SENSING_TIMEOUT: Duration = Duration::from_millis(300);
+
+/// Turns MIDI into finger-board outputs, safely.
+///
+/// `B` is the number of finger boards and `K` the most keys it can serve (the default, 61,
+/// is the thesis's keyboard). For the thesis's robot it needs under 800 bytes of RAM (the
+/// crate docs give the breakdown).
+///
+/// Feed it bytes with [`feed`](Self::feed) (or decoded messages with
+/// [`handle`](Self::handle)), call [`tick`](Self::tick) when no input arrives (at the latest at
+/// [`next_deadline`](Self::next_deadline)), and hand the frame to the boards with
+/// [`flush`](Self::flush). Every method takes the current time; the interpreter never reads a
+/// clock. Time must not go backwards; an earlier time is taken as the latest one seen.
+///
+/// A key goes down when a note lands on it and up only when every note holding it has been
+/// released: the same note on two channels, or two notes folded onto one key. A Note-On for a
+/// note that is already on (the same channel and note, no Note-Off between) re-strikes the key.
+#[derive(Clone, Debug)]
+pub struct Interpreter<const B: usize = 4, const K: usize = 61> {
+    config: Config<B>,
+    decoder: Decoder,
+    /// For each note, the channels holding it.
+    notes: [u16; 128],
+    fingers: Fingers<K>,
+    frame: FingerFrame<B>,
+    /// Channels whose sustain pedal is down.
+    pedals: u16,
+    /// The clock as last seen.
+    clock: Instant,
+    /// When the last input arrived.
+    last_input: Instant,
+    /// An Active Sensing byte was seen and the 300 ms rule is in force.
+    sensing: bool,
+    /// No per-key deadline falls before this.
+    due: Instant,
+    stats: Stats,
+}
+
+impl Interpreter<4, 61> {
+    /// The thesis's robot with orch's default guard.
+    pub const fn thesis() -> Self {
+        Self::unchecked(Config::THESIS)
+    }
+}
+
+impl Default for Interpreter<4, 61> {
+    fn default() -> Self {
+        Self::thesis()
+    }
+}
+
+impl<const B: usize, const K: usize> Interpreter<B, K> {
+    /// An interpreter for `config`, with every key up, at time zero.
+    pub fn new(config: Config<B>) -> Result<Self, ConfigError> {
+        config.validate(K)?;
+        Ok(Self::unchecked(config))
+    }
+
+    const fn unchecked(config: Config<B>) -> Self {
+        Self {
+            config,
+            decoder: Decoder::new(),
+            notes: [0; 128],
+            fingers: Fingers::new(),
+            frame: FingerFrame::new(),
+            pedals: 0,
+            clock: Instant::ZERO,
+            last_input: Instant::ZERO,
+            sensing: false,
+            due: Instant::ZERO,
+            stats: Stats {
+                note_ons: 0,
+                played: 0,
+                folded: 0,
+                folded_octaves: 0,
+                dropped_channel: 0,
+                dropped_range: 0,
+                dropped_power: 0,
+                dropped_cancelled: 0,
+                restrikes_delayed: 0,
+                cut_by_hold_limit: 0,
+                cut_by_watchdog: 0,
+                peak_keys_down: 0,
+            },
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &Config<B> {
+        &self.config
+    }
+
+    /// The wanted outputs of every board.
+    pub fn frame(&self) -> &FingerFrame<B> {
+        &self.frame
+    }
+
+    /// The frame, to mark boards unknown after a bus error ([`FingerFrame::invalidate`]).
+    pub fn frame_mut(&mut self) -> &mut FingerFrame<B> {
+        &mut self.frame
+    }
+
+    /// What happened to the notes so far.
+    pub fn stats(&self) -> &Stats {
+        &self.stats
+    }
+
+    /// The decoder's counters (bytes, messages, dropped, abandoned).
+    pub fn counters(&self) -> Counters {
+        self.decoder.counters()
+    }
+
+    /// Whether `key` (0 = lowest key) is down.
+    pub fn is_down(&self, key: u8) -> bool {
+        (key as usize) < K && self.fingers.phase(key) == DOWN
+    }
+
+    /// How many keys are down.
+    pub fn keys_down(&self) -> u8 {
+        self.fingers.down
+    }
+
+    /// The velocity of the note that last struck `key`, for boards that can use it
+    /// (on/off boards ignore it).
+    pub fn velocity(&self, key: u8) -> Velocity {
+        Velocity::from_bits(self.fingers.velocity(key))
+    }
+
+    /// Writes every board whose outputs changed. See [`FingerFrame::flush`].
+    pub fn flush<O: FingerBoards>(&mut self, out: &mut O) -> Result<u8, FlushError<O::Error>> {
+        self.frame.flush(&self.config.layout, out)
+    }
+
+    /// Feeds one received byte at time `now`.
+    pub fn feed(&mut self, byte: u8, now: Instant) {
+        self.tick(now);
+        let now = self.clock;
+        self.last_input = now;
+        for message in self.decoder.push(byte) {
+            self.apply(message, now);
+        }
+    }
+
+    /// Feeds bytes that all arrived at `now`.
+    pub fn feed_slice(&mut self, bytes: &[u8], now: Instant) {
+        for &byte in bytes {
+            self.feed(byte, now);
+        }
+    }
+
+    /// Handles a message decoded elsewhere, received at `now`.
+    pub fn handle(&mut self, message: Message, now: Instant) {
+        self.tick(now);
+        let now = self.clock;
+        self.last_input = now;
+        self.apply(message, now);
+    }
+
+    /// Releases every key now: for shutdown, panics and errors. Notes waiting to re-strike are
+    /// cancelled and the sustain pedals let go. Flush afterwards to put it on the bus.
+    pub fn all_off(&mut self, now: Instant) {
+        self.advance(now);
+        let now = self.clock;
+        self.release_everything(now);
+    }
+
+    /// The earliest time at which [`tick`](Self::tick) has something to do, if any: a hold
+    /// limit, a delayed re-strike, the watchdog.
+    pub fn next_deadline(&self) -> Option<Instant> {
+        let g = &self.config.guard;
+        if !g.enabled {
+            return None;
+        }
+        let mut next: Option<Instant> = None;
+        let mut consider = |t: Instant| {
+            next = Some(next.map_or(t, |n: Instant| n.min(t)));
+        };
+        let busy = self.fingers.down + self.fingers.pending > 0;
+        if busy {
+            if let Some(wd) = g.watchdog {
+                consider(self.last_input + wd);
+            }
+            if self.sensing {
+                consider(self.last_input + ACTIVE_SENSING_TIMEOUT);
+            }
+        }
+        for key in 0..self.keys() {
+            let limit = match self.fingers.phase(key) {
+                DOWN => match g.max_hold {
+                    Some(hold) => hold,
+                    None => continue,
+                },
+                PENDING => g.restrike_gap,
+                _ => continue,
+            };
+            let age = self.fingers.age(key, self.clock) as u64;
+            let since = Instant::from_micros(self.clock.as_micros().saturating_sub(age));
+            consider(since + limit);
+        }
+        next
+    }
+
+    /// Runs the guard's timers at `now`: hold limits, delayed re-strikes, the watchdog.
+    pub fn tick(&mut self, now: Instant) {
+        self.advance(now);
+        let now = self.clock;
+        let g = self.config.guard;
+        if !g.enabled {
+            return;
+        }
+        let busy = self.fingers.down + self.fingers.pending > 0;
+        let quiet = now.saturating_since(self.last_input);
+        let starved = g.watchdog.is_some_and(|wd| quiet >= wd.as_micros() as u64)
+            || (self.sensing && quiet >= ACTIVE_SENSING_TIMEOUT.as_micros() as u64);
+        if starved {
+            self.sensing = false;
+            if busy {
+                self.stats.cut_by_watchdog += self.fingers.down as u32;
+                self.release_everything(now);
+            }
+        }
+        if now < self.due {
+            return;
+        }
+        let mut due = Instant::from_micros(u64::MAX);
+        for key in 0..self.keys() {
+            let age = self.fingers.age(key, now);
+            match self.fingers.phase(key) {
+                DOWN => {
+                    if let Some(hold) = g.max_hold {
+                        if age >= hold.as_micros() {
+                            self.stats.cut_by_hold_limit += 1;
+                            self.forget_key(key);
+                            self.release_key(key, now);
+                        } else {
+                            due = due.min(now + Duration::from_micros(hold.as_micros() - age));
+                        }
+                    }
+                }
+                PENDING => {
+                    let gap = g.restrike_gap.as_micros();
+                    if age >= gap {
+                        let folded = self.fingers.has(key, FOLDED);
+                        self.count_sounded(folded);
+                        self.press_now(key, now);
+                        if let Some(hold) = g.max_hold {
+                            due = due.min(now + hold);
+                        }
+                    } else {
+                        due = due.min(now + Duration::from_micros(gap - age));
+                    }
+                }
+                RELEASING if age >= g.restrike_gap.as_micros() => {
+                    self.fingers.set_phase(key, READY);
+                }
+                _ => {}
+            }
+        }
+        self.due = due;
+    }
+
+    fn keys(&self) -> u8 {
+        self.config.range.keys() as u8
+    }
+
+    /// Moves the clock to `now` (never back) and keeps per-key ages from wrapping.
+    fn advance(&mut self, now: Instant) {
+        if now <= self.clock {
+            return;
+        }
+        let jump = now.saturating_since(self.clock);
+        self.clock = now;
+        // Ages are clamped well before they could wrap: whenever the clock jumps by at least
+        // the cap (everything is old), and at least once every cap/2 of clock time.
+        if jump >= AGE_CAP as u64 {
+            self.fingers.clamp_ages(now, true);
+        } else if (now.as_micros() >> 30) != ((now.as_micros() - jump) >> 30) {
+            self.fingers.clamp_ages(now, false);
+        }
+    }
+
+    fn apply(&mut self, message: Message, now: Instant) {
+        match message {
+            Message::NoteOn {
+                channel,
+                note,
+                velocity,
+            } if velocity.get() > 0 => self.note_on(channel, note, velocity, now),
+            Message::NoteOn { channel, note, .. } | Message::NoteOff { channel, note, .. } => {
+                self.note_off(channel, note, now)
+            }
+            Message::ControlChange {
+                channel,
+                controller,
+                value,
+            } => match controller.get() {
+                64 if self.config.sustain => {
+                    if value.get() >= 64 {
+                        self.pedals |= channel.bit();
+                    } else {
+                        self.pedal_up(channel, now);
+                    }
+                }
+                // Reset All Controllers lets the pedal up.
+                121 => self.pedal_up(channel, now),
+                // All Sound Off, All Notes Off, and the mode messages that imply All Notes Off.
+                120 | 123..=127 => self.channel_off(channel, now),
+                _ => {}
+            },
+            Message::ActiveSensing => self.sensing = true,
+            Message::Reset => {
+                self.sensing = false;
+                self.release_everything(now);
+            }
+            _ => {}
+        }
+    }
+
+    fn note_on(&mut self, channel: Channel, note: Note, velocity: Velocity, now: Instant) {
+        self.stats.note_ons += 1;
+        if !self.config.channels.contains(channel) {
+            self.stats.dropped_channel += 1;
+            return;
+        }
+        let Some(of) = self.config.range.key_for(note, self.config.out_of_range) else {
+            self.stats.dropped_range += 1;
+            return;
+        };
+        let key = of.key;
+        let folded = of.octaves != 0;
+        if folded {
+            self.stats.folded_octaves += of.octaves.unsigned_abs() as u32;
+        }
+        let repeated = self.notes[note.get() as usize] & channel.bit() != 0;
+        let phase = self.fingers.phase(key);
+        let busy = phase == DOWN || phase == PENDING;
+        if busy && !repeated && self.held(key) {
+            // Another note holds the key already: this one joins it.
+            self.notes[note.get() as usize] |= channel.bit();
+            self.count_sounded(folded);
+            return;
+        }
+        // A fresh strike, or a re-strike of a key that is down only by the pedal or by this
+        // very note again.
+        if !busy && self.config.guard.enabled {
+            let g = &self.config.guard;
+            if self.fingers.down + self.fingers.pending >= g.max_keys_down {
+                self.stats.dropped_power += 1;
+                return;
+            }
+        }
+        self.notes[note.get() as usize] |= channel.bit();
+        self.fingers.set_flag(key, SUSTAINED, false);
+        if phase == PENDING {
+            // Still waiting: the re-strike happens once, with the newest velocity.
+            self.fingers.set_velocity(key, velocity.get());
+            self.fingers.set_flag(key, FOLDED, folded);
+            self.count_sounded(folded);
+            return;
+        }
+        if phase == DOWN {
+            self.release_key(key, now);
+        }
+        self.fingers.set_velocity(key, velocity.get());
+        self.strike(key, folded, now);
+    }
+
+    fn note_off(&mut self, channel: Channel, note: Note, now: Instant) {
+        let slot = &mut self.notes[note.get() as usize];
+        if *slot & channel.bit() == 0 {
+            return;
+        }
+        *slot &= !channel.bit();
+        let Some(of) = self.config.range.key_for(note, self.config.out_of_range) else {
+            return;
+        };
+        let key = of.key;
+        if self.config.sustain && self.pedals & channel.bit() != 0 {
+            let phase = self.fingers.phase(key);
+            if phase == DOWN || phase == PENDING {
+                self.fingers.set_flag(key, SUSTAINED, true);
+            }
+            return;
+        }
+        if !self.held(key) && !self.fingers.has(key, SUSTAINED) {
+            self.release_key(key, now);
+        }
+    }
+
+    fn pedal_up(&mut self, channel: Channel, now: Instant) {
+        self.pedals &= !channel.bit();
+        if self.pedals != 0 {
+            return;
+        }
+        for key in 0..self.keys() {
+            if self.fingers.has(key, SUSTAINED) {
+                self.fingers.set_flag(key, SUSTAINED, false);
+                if !self.held(key) {
+                    self.release_key(key, now);
+                }
+            }
+        }
+    }
+
+    fn channel_off(&mut self, channel: Channel, now: Instant) {
+        for slot in self.notes.iter_mut() {
+            *slot &= !channel.bit();
+        }
+        self.pedals &= !channel.bit();
+        let pedal_holds = self.pedals != 0;
+        for key in 0..self.keys() {
+            let phase = self.fingers.phase(key);
+            if phase != DOWN && phase != PENDING {
+                continue;
+            }
+            let sustained = self.fingers.has(key, SUSTAINED) && pedal_holds;
+            if !self.held(key) && !sustained {
+                self.release_key(key, now);
+            }
+        }
+    }
+
+    fn release_everything(&mut self, now: Instant) {
+        self.notes = [0; 128];
+        self.pedals = 0;
+        for key in 0..self.keys() {
+            self.release_key(key, now);
+        }
+        self.frame.clear();
+    }
+
+    /// Whether any note still holds `key`.
+    fn held(&self, key: u8) -> bool {
+        let mut held = false;
+        self.config
+            .range
+            .notes_of(key, self.config.out_of_range, |n| {
+                held |= self.notes[n.get() as usize] != 0
+            });
+        held
+    }
+
+    /// Forgets every note holding `key` (after the guard cut it), so its Note-Offs are no-ops
+    /// and the next Note-On strikes afresh.
+    fn forget_key(&mut self, key: u8) {
+        let notes = &mut self.notes;
+        self.config
+            .range
+            .notes_of(key, self.config.out_of_range, |n| {
+                notes[n.get() as usize] = 0
+            });
+        self.fingers.set_flag(key, SUSTAINED, false);
+    }
+
+    /// Strikes `key` now, or once its re-strike gap has passed.
+    fn strike(&mut self, key: u8, folded: bool, now: Instant) {
+        let g = self.config.guard;
+        let resting = self.fingers.phase(key) == RELEASING
+            && g.enabled
+            && self.fingers.age(key, now) < g.restrike_gap.as_micros();
+        if resting {
+            let wait = g.restrike_gap.as_micros() - self.fingers.age(key, now);
+            self.fingers.set_phase(key, PENDING);
+            self.fingers.set_flag(key, FOLDED, folded);
+            self.stats.restrikes_delayed += 1;
+            self.due = self.due.min(now + Duration::from_micros(wait));
+        } else {
+            self.count_sounded(folded);
+            self.press_now(key, now);
+            if let Some(hold) = g.max_hold {
+                self.due = self.due.min(now + hold);
+            }
+        }
+    }
+
+    fn count_sounded(&mut self, folded: bool) {
+        if folded {
+            self.stats.folded += 1;
+        } else {
+            self.stats.played += 1;
+        }
+    }
+
+    fn press_now(&mut self, key: u8, now: Instant) {
+        self.fingers.enter(key, DOWN, now);
+        self.fingers.set_flag(key, FOLDED, false);
+        if let Some(f) = self.config.layout.finger(key) {
+            self.frame.set(f.board, f.bit, true);
+        }
+        self.stats.peak_keys_down = self.stats.peak_keys_down.max(self.fingers.down);
+    }
+
+    fn release_key(&mut self, key: u8, now: Instant) {
+        match self.fingers.phase(key) {
+            DOWN => {
+                self.fingers.enter(key, RELEASING, now);
+                if let Some(f) = self.config.layout.finger(key) {
+                    self.frame.set(f.board, f.bit, false);
+                }
+            }
+            PENDING => {
+                // It never struck: it keeps resting from its earlier release.
+                self.stats.dropped_cancelled += 1;
+                self.fingers.set_phase(key, RELEASING);
+            }
+            _ => {}
+        }
+    }
+}

@@ -1,0 +1,72 @@
+//! # orch-core: the one brain of a MIDI-driven solenoid instrument
+//!
+//! `no_std`, allocation-free and I/O-free. It turns a live MIDI 1.0 byte stream into writes
+//! to finger boards (16 solenoid outputs each), with the safety a real robot needs: no key
+//! stays down because input stopped, no solenoid is held long enough to overheat, and a
+//! repeated note always lifts, rests and strikes again.
+//!
+//! - [`Decoder`]: the MIDI 1.0 stream decoder, exact to the specification (running status,
+//!   real-time bytes anywhere, SysEx, undefined status bytes), with counters.
+//! - [`Interpreter`]: decoded messages plus the current time in, a [`FingerFrame`] out. Maps
+//!   notes to keys ([`KeyRange`], [`OutOfRange`]) and keys to fingers ([`Layout`]), keeps track
+//!   of which notes hold each key, and runs the safety guard ([`GuardConfig`]).
+//! - [`FingerBoards`]: the one output trait, implemented by real boards (`orch-boards`), the
+//!   virtual robot and the [`Recording`] test double.
+//!
+//! Time is passed in ([`Instant`], microseconds); the core never reads a clock, a file or a bus.
+//!
+//! ```
+//! use orch_core::{Instant, Interpreter, Recording};
+//!
+//! let mut robot = Interpreter::thesis();
+//! let mut boards = Recording::<8>::new();
+//! robot.feed_slice(&[0x90, 60, 100], Instant::from_micros(0)); // middle C down
+//! robot.flush(&mut boards).unwrap();
+//! // Key 60 − 36 = 24: board 1 (0x22), bit 8.
+//! assert_eq!(boards.outputs(1), 1 << 8);
+//! robot.all_off(Instant::from_millis(5));
+//! robot.flush(&mut boards).unwrap();
+//! assert_eq!(boards.outputs(1), 0);
+//! ```
+//!
+//! ## Memory
+//!
+//! Sized for the thesis's ATmega16 (1 KB of SRAM for everything, stack included). For 4 boards
+//! and 61 keys, [`Interpreter`] (decoder and guard included) takes **792 bytes** on a 64-bit
+//! host, padding included (a test checks the figure), and about 780 on AVR, which has no
+//! padding: 256 for which channels hold each of the 128 notes (the exact release rules need
+//! them), 366 for the 61 keys' phase, 32-bit timestamp and velocity, and the rest for the
+//! configuration (44), counters (48), frame (16), clock and decoder state (28). The [`Decoder`]
+//! alone takes 28 bytes.
+//!
+//! ## Cargo features
+//!
+//! None: the crate is always `no_std` and allocation-free.
+#![no_std]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+mod config;
+mod decoder;
+mod fingers;
+mod frame;
+mod interpreter;
+mod keymap;
+mod message;
+mod output;
+mod recording;
+mod stats;
+mod time;
+mod values;
+
+pub use config::{Config, ConfigError, GuardConfig, MAX_LIMIT};
+pub use decoder::{Counters, Decoded, Decoder};
+pub use frame::{FingerFrame, FlushError};
+pub use interpreter::{Interpreter, ACTIVE_SENSING_TIMEOUT};
+pub use keymap::{BoardSpan, Finger, KeyOf, KeyRange, Layout, OutOfRange};
+pub use message::Message;
+pub use output::{BoardId, FingerBoards};
+pub use recording::{Nack, Recording, Write};
+pub use stats::Stats;
+pub use time::{Duration, Instant};
+pub use values::{Channel, ChannelMask, InvalidValue, Note, Velocity, U14, U7};

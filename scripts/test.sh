@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# The test command: everything CI checks, installing what a fresh machine lacks.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n==> %s\n' "$*"; }
+
+step "toolchain pieces"
+rustup component list --installed 2>/dev/null | grep -q '^clippy' || rustup component add clippy
+rustup component list --installed 2>/dev/null | grep -q '^rustfmt' || rustup component add rustfmt
+rustup target list --installed | grep -qx thumbv6m-none-eabi || rustup target add thumbv6m-none-eabi
+
+step "format"
+cargo fmt --all -- --check
+
+step "lint"
+cargo clippy --workspace --all-targets --all-features -- -D warnings
+
+step "no_std: orch-core and orch-boards for thumbv6m-none-eabi"
+cargo build -p orch-core -p orch-boards --target thumbv6m-none-eabi
+
+step "docs"
+RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features
+
+step "fuzz target builds (stable; running it needs nightly, see fuzz/README.md)"
+if [ -f fuzz/Cargo.toml ]; then cargo check --manifest-path fuzz/Cargo.toml --bins; fi
+
+step "tests (the fuzz corpus and crash regressions are replayed by orch-core's fuzz_replay test)"
+cargo test --workspace --all-features

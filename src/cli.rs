@@ -1,0 +1,62 @@
+//! The command line.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+/// Make MIDI-driven solenoid instruments play.
+#[derive(Parser, Debug)]
+#[command(name = "orch", version, about, propagate_version = true)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Decode raw MIDI bytes and print one message per line, then the counters.
+    Decode(DecodeArgs),
+    /// Run raw MIDI bytes through the interpreter and the safety guard, and print every board
+    /// write as it would go on the bus.
+    Interpret(InterpretArgs),
+    /// Print the default robot configuration (robot.toml), commented.
+    Config,
+}
+
+/// Where the bytes come from and how they are written.
+#[derive(Args, Debug)]
+pub struct Source {
+    /// File of raw MIDI bytes; `-` or nothing reads standard input.
+    #[arg(value_name = "FILE|-")]
+    pub file: Option<PathBuf>,
+    /// The input is hex text: pairs of hex digits, whitespace optional, `#` starts a comment.
+    #[arg(long)]
+    pub hex: bool,
+    /// Print one JSON object per line instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct DecodeArgs {
+    #[command(flatten)]
+    pub source: Source,
+}
+
+#[derive(Args, Debug)]
+pub struct InterpretArgs {
+    #[command(flatten)]
+    pub source: Source,
+    /// The robot's configuration (see `orch config`); the thesis's robot if not given.
+    #[arg(long, value_name = "FILE")]
+    pub robot: Option<PathBuf>,
+    /// Turn the safety guard off to show the bare note-to-finger mapping.
+    #[arg(long, value_enum, default_value_t = OnOff::On)]
+    pub guard: OnOff,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum OnOff {
+    On,
+    Off,
+}

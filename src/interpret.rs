@@ -1,0 +1,128 @@
+//! `orch interpret`: raw MIDI bytes through the interpreter and the safety guard, every board
+//! write printed as it would go on the bus.
+//!
+//! Raw bytes carry no time, so byte `i` is taken to arrive at `i × 320 µs`: back to back at DIN
+//! wire speed from t = 0. Timer-driven writes (hold limit, delayed re-strike, watchdog) are
+//! printed at their own time with no byte index. The last line is the state of every board
+//! after the last byte.
+
+use std::io::{self, BufWriter, Write};
+
+use orch_core::{BoardId, FingerBoards, Instant};
+use serde_json::json;
+
+use crate::cli::{InterpretArgs, OnOff};
+use crate::input;
+use crate::robot::Robot;
+
+/// One DIN MIDI byte on the wire: 10 bits at 31250 baud.
+pub const DIN_BYTE_MICROS: u64 = 320;
+
+/// Prints board writes; the caller says when and why they happen.
+struct Printer<W: Write> {
+    out: W,
+    json: bool,
+    t: Instant,
+    byte: Option<u64>,
+}
+
+impl<W: Write> FingerBoards for Printer<W> {
+    type Error = io::Error;
+
+    fn write_board(&mut self, board: BoardId, outputs: u16) -> io::Result<()> {
+        if self.json {
+            let line = json!({"t_us": self.t.as_micros(), "byte": self.byte, "address": board.address, "outputs": outputs});
+            writeln!(self.out, "{line}")
+        } else {
+            let cause = match self.byte {
+                Some(i) => format!("byte {i}"),
+                None => "timer".to_string(),
+            };
+            let fingers: String = (0..16)
+                .map(|b| if outputs & (1 << b) != 0 { '#' } else { '.' })
+                .collect();
+            writeln!(
+                self.out,
+                "{:>11.3} ms  {cause:<11} {:#04x} <- {outputs:#06x}  |{fingers}|",
+                self.t.as_micros() as f64 / 1000.0,
+                board.address
+            )
+        }
+    }
+}
+
+pub fn run(args: &InterpretArgs) -> anyhow::Result<()> {
+    let robot = match &args.robot {
+        Some(path) => Robot::load(path)?,
+        None => Robot::thesis(),
+    };
+    let mut robot = robot;
+    if args.guard == OnOff::Off {
+        robot.config.guard.enabled = false;
+    }
+    let mut interp = robot.interpreter()?;
+    let stdout = io::stdout();
+    let mut printer = Printer {
+        out: BufWriter::new(stdout.lock()),
+        json: args.source.json,
+        t: Instant::ZERO,
+        byte: None,
+    };
+    let mut index: u64 = 0;
+    input::for_each_chunk(&args.source, |bytes| {
+        for &byte in bytes {
+            let now = Instant::from_micros(index * DIN_BYTE_MICROS);
+            // Timers due before (or at) this byte's arrival fire first, on their own.
+            while let Some(due) = interp.next_deadline().filter(|&d| d <= now) {
+                interp.tick(due);
+                printer.t = due;
+                printer.byte = None;
+                interp.flush(&mut printer).map_err(|e| e.error)?;
+                if interp.next_deadline() == Some(due) {
+                    break;
+                }
+            }
+            interp.feed(byte, now);
+            printer.t = now;
+            printer.byte = Some(index);
+            interp.flush(&mut printer).map_err(|e| e.error)?;
+            index += 1;
+        }
+        printer.out.flush()?;
+        Ok(())
+    })?;
+    let layout = &interp.config().layout;
+    let boards = &layout.boards[..robot.boards];
+    let mut out = printer.out;
+    if args.source.json {
+        let list: Vec<_> = boards
+            .iter()
+            .enumerate()
+            .map(|(i, b)| json!({"address": b.address, "outputs": interp.frame().outputs(i)}))
+            .collect();
+        writeln!(out, "{}", json!({"type": "final", "boards": list}))?;
+    } else {
+        let s = interp.stats();
+        let c = interp.counters();
+        writeln!(
+            out,
+            "# {} bytes, {} messages, {} dropped, {} abandoned",
+            c.bytes, c.messages, c.dropped, c.abandoned
+        )?;
+        writeln!(
+            out,
+            "# {} notes: {} played, {} folded, {} dropped (channel {}, range {}, power {}, cancelled {}); {} re-strikes delayed, {} cut by the hold limit, {} by the watchdog; at most {} keys down",
+            s.note_ons, s.played, s.folded, s.dropped(), s.dropped_channel, s.dropped_range,
+            s.dropped_power, s.dropped_cancelled, s.restrikes_delayed, s.cut_by_hold_limit,
+            s.cut_by_watchdog, s.peak_keys_down
+        )?;
+        let finals: Vec<String> = boards
+            .iter()
+            .enumerate()
+            .map(|(i, b)| format!("{:#04x}={:#06x}", b.address, interp.frame().outputs(i)))
+            .collect();
+        writeln!(out, "# final: {}", finals.join(" "))?;
+    }
+    out.flush()?;
+    Ok(())
+}

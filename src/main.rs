@@ -1,0 +1,45 @@
+//! `orch`: make MIDI-driven solenoid instruments play.
+//!
+//! Thin glue: parse the arguments, build the pieces, run, and exit with 0 (success),
+//! 1 (something failed while running) or 2 (bad usage or bad input: the command line, a file,
+//! a configuration).
+
+mod cli;
+mod decode;
+mod error;
+mod hex;
+mod input;
+mod interpret;
+mod robot;
+mod show;
+
+use std::process::ExitCode;
+
+use clap::Parser;
+
+fn main() -> ExitCode {
+    let cli = match cli::Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() {
+                ExitCode::from(2)
+            } else {
+                ExitCode::SUCCESS
+            };
+        }
+    };
+    let result = match cli.command {
+        cli::Command::Decode(args) => decode::run(&args),
+        cli::Command::Interpret(args) => interpret::run(&args),
+        cli::Command::Config => robot::print_default(),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) if error::is_broken_pipe(&e) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("orch: error: {e:#}");
+            ExitCode::from(error::exit_code(&e))
+        }
+    }
+}

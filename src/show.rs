@@ -1,0 +1,157 @@
+//! How messages and counters are shown: text in the manner of `aseqdump`, or JSON lines with
+//! mido's message names and fields (channels 0-based).
+
+use orch_core::{Counters, Message};
+use serde_json::{json, Value};
+
+/// A message with the System Exclusive payload the caller collected.
+pub struct Shown<'a> {
+    pub message: Message,
+    pub sysex: &'a [u8],
+}
+
+/// One line of text for a message.
+pub fn text(m: &Shown<'_>) -> String {
+    use Message::*;
+    match m.message {
+        NoteOff {
+            channel,
+            note,
+            velocity,
+        } => {
+            format!("Note off               {channel:2}, note {note}, velocity {velocity}")
+        }
+        NoteOn {
+            channel,
+            note,
+            velocity,
+        } => {
+            format!("Note on                {channel:2}, note {note}, velocity {velocity}")
+        }
+        PolyPressure {
+            channel,
+            note,
+            pressure,
+        } => {
+            format!("Polyphonic aftertouch  {channel:2}, note {note}, value {pressure}")
+        }
+        ControlChange {
+            channel,
+            controller,
+            value,
+        } => {
+            format!("Control change         {channel:2}, controller {controller}, value {value}")
+        }
+        ProgramChange { channel, program } => {
+            format!("Program change         {channel:2}, program {program}")
+        }
+        ChannelPressure { channel, pressure } => {
+            format!("Channel aftertouch     {channel:2}, value {pressure}")
+        }
+        PitchBend { channel, value } => {
+            format!(
+                "Pitch bend             {channel:2}, value {}",
+                value.centered()
+            )
+        }
+        SysExStart => "System exclusive start".into(),
+        SysEx { len, terminated } => {
+            let mut s = String::from("System exclusive       F0");
+            for b in m.sysex {
+                s.push_str(&format!(" {b:02X}"));
+            }
+            if terminated {
+                s.push_str(" F7");
+            } else {
+                s.push_str(" (cut short by a status byte)");
+            }
+            s.push_str(&format!("  [{len} data bytes]"));
+            s
+        }
+        QuarterFrame(data) => {
+            let (t, v) = Message::quarter_frame_parts(data);
+            format!("MTC quarter frame      type {t}, value {v}")
+        }
+        SongPosition(pos) => format!("Song position pointer  value {}", pos.get()),
+        SongSelect(song) => format!("Song select            value {song}"),
+        TuneRequest => "Tune request".into(),
+        Clock => "Clock".into(),
+        Start => "Start".into(),
+        Continue => "Continue".into(),
+        Stop => "Stop".into(),
+        ActiveSensing => "Active Sensing".into(),
+        Reset => "System reset".into(),
+    }
+}
+
+/// The message as a mido-style dict, or `None` for the SysEx start notification.
+pub fn json(m: &Shown<'_>) -> Option<Value> {
+    use Message::*;
+    Some(match m.message {
+        NoteOff {
+            channel,
+            note,
+            velocity,
+        } => {
+            json!({"type": "note_off", "channel": channel.get(), "note": note.get(), "velocity": velocity.get()})
+        }
+        NoteOn {
+            channel,
+            note,
+            velocity,
+        } => {
+            json!({"type": "note_on", "channel": channel.get(), "note": note.get(), "velocity": velocity.get()})
+        }
+        PolyPressure {
+            channel,
+            note,
+            pressure,
+        } => {
+            json!({"type": "polytouch", "channel": channel.get(), "note": note.get(), "value": pressure.get()})
+        }
+        ControlChange {
+            channel,
+            controller,
+            value,
+        } => {
+            json!({"type": "control_change", "channel": channel.get(), "control": controller.get(), "value": value.get()})
+        }
+        ProgramChange { channel, program } => {
+            json!({"type": "program_change", "channel": channel.get(), "program": program.get()})
+        }
+        ChannelPressure { channel, pressure } => {
+            json!({"type": "aftertouch", "channel": channel.get(), "value": pressure.get()})
+        }
+        PitchBend { channel, value } => {
+            json!({"type": "pitchwheel", "channel": channel.get(), "pitch": value.centered()})
+        }
+        SysExStart => return None,
+        SysEx { .. } => json!({"type": "sysex", "data": m.sysex}),
+        QuarterFrame(data) => {
+            let (t, v) = Message::quarter_frame_parts(data);
+            json!({"type": "quarter_frame", "frame_type": t, "frame_value": v})
+        }
+        SongPosition(pos) => json!({"type": "songpos", "pos": pos.get()}),
+        SongSelect(song) => json!({"type": "song_select", "song": song.get()}),
+        TuneRequest => json!({"type": "tune_request"}),
+        Clock => json!({"type": "clock"}),
+        Start => json!({"type": "start"}),
+        Continue => json!({"type": "continue"}),
+        Stop => json!({"type": "stop"}),
+        ActiveSensing => json!({"type": "active_sensing"}),
+        Reset => json!({"type": "reset"}),
+    })
+}
+
+/// The counters as the last line of text.
+pub fn counters_text(c: &Counters) -> String {
+    format!(
+        "# {} bytes, {} messages, {} dropped, {} abandoned",
+        c.bytes, c.messages, c.dropped, c.abandoned
+    )
+}
+
+/// The counters as the last JSON line.
+pub fn counters_json(c: &Counters) -> Value {
+    json!({"type": "summary", "bytes": c.bytes, "messages": c.messages, "dropped": c.dropped, "abandoned": c.abandoned})
+}
