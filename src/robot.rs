@@ -102,6 +102,7 @@ enabled = true
 max_hold = "10s"          # the longest a key may stay down
 max_keys_down = 16        # the power budget: a new note past it is refused
 restrike_gap = "60ms"     # the shortest rest before a key strikes again
+min_press = "20ms"        # how long a delayed re-strike is held if its note ended while it waited
 watchdog = "4s"           # release every key after this long without a byte
 "#;
 
@@ -173,6 +174,7 @@ struct Guard {
     max_hold: String,
     max_keys_down: u8,
     restrike_gap: String,
+    min_press: String,
     watchdog: String,
 }
 
@@ -183,6 +185,7 @@ impl Default for Guard {
             max_hold: "10s".into(),
             max_keys_down: 16,
             restrike_gap: "60ms".into(),
+            min_press: "20ms".into(),
             watchdog: "4s".into(),
         }
     }
@@ -203,9 +206,11 @@ fn duration(field: &str, text: &str) -> anyhow::Result<Option<Duration>> {
         "ms" => 1e3,
         "s" => 1e6,
         "min" => 60e6,
-        _ => return Err(bad_input(format!(
+        _ => {
+            return Err(bad_input(format!(
             "{field} = {text:?}: write a duration like \"60ms\", \"10s\" or \"2min\", or \"off\""
-        ))),
+        )))
+        }
     };
     let value: f64 = number
         .parse()
@@ -311,6 +316,7 @@ impl File {
             max_keys_down: g.max_keys_down,
             restrike_gap: duration("guard.restrike_gap", &g.restrike_gap)?
                 .unwrap_or(Duration::ZERO),
+            min_press: duration("guard.min_press", &g.min_press)?.unwrap_or(Duration::ZERO),
             watchdog: duration("guard.watchdog", &g.watchdog)?,
         };
         let config = Config {

@@ -17,6 +17,7 @@ pub const MAX_LIMIT: Duration = Duration::from_secs(30 * 60);
 /// | [`max_hold`](Self::max_hold) | 10 s | The open DIY player pianos switch a key off after 10 s; a small solenoid held on runs hot within a minute. Piano music rarely holds a key longer (a whole note at 30 bpm is 8 s). |
 /// | [`max_keys_down`](Self::max_keys_down) | 16 | The power budget. More than two hands (10 fingers), below the 22–26 keys per supply of the DIY pianos, and one board's worth of outputs. When it is reached the **new note is refused** (counted in [`Stats::dropped_power`](crate::Stats::dropped_power)); keys already down are never cut for it, because a cut note is heard as a mistake twice, and a late one would be too. |
 /// | [`restrike_gap`](Self::restrike_gap) | 60 ms | A key must be up this long before it strikes again, so a repeated note releases, waits and presses again instead of smearing. The DIY pianos re-strike after 52–80 ms; a grand's action repeats about 14 times a second (71 ms a cycle). |
+/// | [`min_press`](Self::min_press) | 20 ms | How long a delayed re-strike is held when its note was already released before it could strike (a note shorter than the rest it had to wait for). It still sounds, rather than being lost: the DIY pianos strike at full power for about 18 ms. Notes that strike on time are released when their Note-Off says. |
 /// | [`watchdog`](Self::watchdog) | 4 s | If no byte arrives this long while keys are down, the sender is taken as gone and every key is released. Longer than the silences of held chords in slow music, much shorter than the minute in which a held solenoid overheats. Once an Active Sensing byte (0xFE) has been seen, the specification's 300 ms applies as well. |
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct GuardConfig {
@@ -29,6 +30,8 @@ pub struct GuardConfig {
     pub max_keys_down: u8,
     /// The shortest time a key stays up before it strikes again.
     pub restrike_gap: Duration,
+    /// How long a delayed re-strike is held when its note was released before it struck.
+    pub min_press: Duration,
     /// Release every key if no byte arrives for this long while keys are down; `None` for never.
     pub watchdog: Option<Duration>,
 }
@@ -40,6 +43,7 @@ impl GuardConfig {
         max_hold: Some(Duration::from_secs(10)),
         max_keys_down: 16,
         restrike_gap: Duration::from_millis(60),
+        min_press: Duration::from_millis(20),
         watchdog: Some(Duration::from_secs(4)),
     };
 
@@ -55,6 +59,7 @@ impl GuardConfig {
         max_hold: None,
         max_keys_down: u8::MAX,
         restrike_gap: Duration::ZERO,
+        min_press: Duration::ZERO,
         watchdog: None,
     };
 }
@@ -174,7 +179,9 @@ impl<const B: usize> Config<B> {
         let g = &self.guard;
         if g.enabled {
             let too_long = |d: Option<Duration>| d.is_some_and(|d| d > MAX_LIMIT);
-            if too_long(g.max_hold) || too_long(g.watchdog) || g.restrike_gap > MAX_LIMIT {
+            if too_long(g.max_hold) || too_long(g.watchdog) || g.restrike_gap > MAX_LIMIT
+                || g.min_press > MAX_LIMIT
+            {
                 return Err(ConfigError::LimitTooLong);
             }
             if g.max_keys_down == 0 {

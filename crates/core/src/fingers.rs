@@ -10,6 +10,9 @@
 //!                                   └────── Pending ◀────────┘
 //! ```
 //!
+//! A note released while its key is `Pending` still strikes when the gap has passed, and is
+//! released again after the guard's `min_press` (flag `RELEASE_AFTER`).
+//!
 //! Times are kept per key as the low 32 bits of the microsecond clock (4 bytes a key instead
 //! of 8). An age is `now − stamp` in wrapping arithmetic; ages are clamped to [`AGE_CAP`]
 //! (35 minutes) before they could wrap, which is safe because every guard limit is at most
@@ -29,6 +32,8 @@ const PHASE: u8 = 0b11;
 pub(crate) const SUSTAINED: u8 = 0b100;
 /// The note waiting in `PENDING` was folded.
 pub(crate) const FOLDED: u8 = 0b1000;
+/// The note of a delayed strike was released before it struck: release after `min_press`.
+pub(crate) const RELEASE_AFTER: u8 = 0b1_0000;
 
 /// Physical state of `K` keys: 6 bytes a key.
 #[derive(Clone, Debug)]
@@ -100,7 +105,7 @@ impl<const K: usize> Fingers<K> {
             _ => {}
         }
         let keep = if phase == DOWN || phase == PENDING {
-            self.flags[k] & (SUSTAINED | FOLDED)
+            self.flags[k] & (SUSTAINED | FOLDED | RELEASE_AFTER)
         } else {
             0
         };

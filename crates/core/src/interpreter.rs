@@ -2,7 +2,9 @@
 
 use crate::config::{Config, ConfigError};
 use crate::decoder::{Counters, Decoder};
-use crate::fingers::{Fingers, AGE_CAP, DOWN, FOLDED, PENDING, READY, RELEASING, SUSTAINED};
+use crate::fingers::{
+    Fingers, AGE_CAP, DOWN, FOLDED, PENDING, READY, RELEASE_AFTER, RELEASING, SUSTAINED,
+};
 use crate::frame::{FingerFrame, FlushError};
 use crate::message::Message;
 use crate::output::FingerBoards;
@@ -199,6 +201,10 @@ impl<const B: usize, const K: usize> Interpreter<B, K> {
         }
         for key in 0..self.keys() {
             let limit = match self.fingers.phase(key) {
+                DOWN if self.fingers.has(key, RELEASE_AFTER) => match g.max_hold {
+                    Some(hold) => hold.min(g.min_press),
+                    None => g.min_press,
+                },
                 DOWN => match g.max_hold {
                     Some(hold) => hold,
                     None => continue,
@@ -240,13 +246,21 @@ impl<const B: usize, const K: usize> Interpreter<B, K> {
             let age = self.fingers.age(key, now);
             match self.fingers.phase(key) {
                 DOWN => {
-                    if let Some(hold) = g.max_hold {
-                        if age >= hold.as_micros() {
-                            self.stats.cut_by_hold_limit += 1;
-                            self.forget_key(key);
-                            self.release_key(key, now);
-                        } else {
-                            due = due.min(now + Duration::from_micros(hold.as_micros() - age));
+                    let hold = g.max_hold.map(Duration::as_micros);
+                    let short = self.fingers.has(key, RELEASE_AFTER);
+                    if hold.is_some_and(|h| age >= h) {
+                        self.stats.cut_by_hold_limit += 1;
+                        self.forget_key(key);
+                        self.release_key(key, now);
+                    } else if short && age >= g.min_press.as_micros() {
+                        self.release_key(key, now);
+                    } else {
+                        let mut limit = hold.unwrap_or(u32::MAX);
+                        if short {
+                            limit = limit.min(g.min_press.as_micros());
+                        }
+                        if limit != u32::MAX {
+                            due = due.min(now + Duration::from_micros(limit - age));
                         }
                     }
                 }
@@ -256,9 +270,11 @@ impl<const B: usize, const K: usize> Interpreter<B, K> {
                         let folded = self.fingers.has(key, FOLDED);
                         self.count_sounded(folded);
                         self.press_now(key, now);
-                        if let Some(hold) = g.max_hold {
-                            due = due.min(now + hold);
+                        let mut limit = g.max_hold.unwrap_or(Duration::MAX);
+                        if self.fingers.has(key, RELEASE_AFTER) {
+                            limit = limit.min(g.min_press);
                         }
+                        due = due.min(now + limit);
                     } else {
                         due = due.min(now + Duration::from_micros(gap - age));
                     }
@@ -365,10 +381,12 @@ impl<const B: usize, const K: usize> Interpreter<B, K> {
         self.notes[note.get() as usize] |= channel.bit();
         self.fingers.set_flag(key, SUSTAINED, false);
         if phase == PENDING {
-            // Still waiting: the re-strike happens once, with the newest velocity.
+            // Still waiting: the earlier note merges into the strike, which is now this note's.
+            let earlier_folded = self.fingers.has(key, FOLDED);
+            self.count_sounded(earlier_folded);
             self.fingers.set_velocity(key, velocity.get());
             self.fingers.set_flag(key, FOLDED, folded);
-            self.count_sounded(folded);
+            self.fingers.set_flag(key, RELEASE_AFTER, false);
             return;
         }
         if phase == DOWN {
@@ -437,7 +455,7 @@ impl<const B: usize, const K: usize> Interpreter<B, K> {
         self.notes = [0; 128];
         self.pedals = 0;
         for key in 0..self.keys() {
-            self.release_key(key, now);
+            self.cancel_key(key, now);
         }
         self.frame.clear();
     }
@@ -512,11 +530,22 @@ impl<const B: usize, const K: usize> Interpreter<B, K> {
                 }
             }
             PENDING => {
-                // It never struck: it keeps resting from its earlier release.
-                self.stats.dropped_cancelled += 1;
-                self.fingers.set_phase(key, RELEASING);
+                // Its note is over before it could strike: it strikes anyway once the gap has
+                // passed, and is held for `min_press`.
+                self.fingers.set_flag(key, RELEASE_AFTER, true);
             }
             _ => {}
+        }
+    }
+
+    /// Releases `key` if down, and cancels a delayed strike: for resets and cuts.
+    fn cancel_key(&mut self, key: u8, now: Instant) {
+        if self.fingers.phase(key) == PENDING {
+            // It never struck: it keeps resting from its earlier release.
+            self.stats.dropped_cancelled += 1;
+            self.fingers.set_phase(key, RELEASING);
+        } else {
+            self.release_key(key, now);
         }
     }
 }

@@ -1,0 +1,273 @@
+//! The `orch` command's public face: what people and scripts see.
+
+use assert_cmd::Command;
+use serde_json::Value;
+
+fn orch() -> Command {
+    Command::cargo_bin("orch").unwrap()
+}
+
+fn json_lines(stdout: &[u8]) -> Vec<Value> {
+    String::from_utf8_lossy(stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}")))
+        .collect()
+}
+
+fn run(args: &[&str], stdin: impl Into<Vec<u8>>) -> (i32, Vec<u8>, String) {
+    let out = orch()
+        .args(args)
+        .write_stdin(stdin.into())
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap(),
+        out.stdout,
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn decode_json_prints_thesis_table_4_with_mido_names_and_a_summary() {
+    let (code, out, _) = run(
+        &["decode", "--hex", "--json", "-"],
+        "90 3C 7F 40 7F 43 7F 80 40 00\n",
+    );
+    assert_eq!(code, 0);
+    let lines = json_lines(&out);
+    let expect = [
+        r#"{"type":"note_on","channel":0,"note":60,"velocity":127}"#,
+        r#"{"type":"note_on","channel":0,"note":64,"velocity":127}"#,
+        r#"{"type":"note_on","channel":0,"note":67,"velocity":127}"#,
+        r#"{"type":"note_off","channel":0,"note":64,"velocity":0}"#,
+        r#"{"type":"summary","bytes":10,"messages":4,"dropped":0,"abandoned":0}"#,
+    ];
+    assert_eq!(lines.len(), expect.len());
+    for (got, want) in lines.iter().zip(expect) {
+        assert_eq!(got, &serde_json::from_str::<Value>(want).unwrap());
+    }
+    // Key order as in the spec's example, "type" first.
+    assert!(String::from_utf8_lossy(&out).starts_with(r#"{"type":"note_on","channel":0"#));
+}
+
+#[test]
+fn decode_json_covers_every_message_kind() {
+    let hex = "A1 3C 10 B2 40 7F C3 05 D4 20 E5 00 00 E5 7F 7F 95 3C 00 \
+               F1 35 F2 01 02 F3 07 F6 F8 FA FB FC FE FF F0 7E 01 F7";
+    let (code, out, _) = run(&["decode", "--hex", "--json"], hex);
+    assert_eq!(code, 0);
+    let lines = json_lines(&out);
+    let types: Vec<&str> = lines.iter().map(|v| v["type"].as_str().unwrap()).collect();
+    assert_eq!(
+        types,
+        [
+            "polytouch",
+            "control_change",
+            "program_change",
+            "aftertouch",
+            "pitchwheel",
+            "pitchwheel",
+            "note_on",
+            "quarter_frame",
+            "songpos",
+            "song_select",
+            "tune_request",
+            "clock",
+            "start",
+            "continue",
+            "stop",
+            "active_sensing",
+            "reset",
+            "sysex",
+            "summary"
+        ]
+    );
+    assert_eq!(lines[0]["channel"], 1);
+    assert_eq!(lines[0]["value"], 16);
+    assert_eq!(lines[1]["control"], 64);
+    assert_eq!(lines[4]["pitch"], -8192);
+    assert_eq!(lines[5]["pitch"], 8191);
+    assert_eq!(
+        lines[6]["velocity"], 0,
+        "velocity-0 note-on printed as it came"
+    );
+    assert_eq!(
+        (
+            lines[7]["frame_type"].clone(),
+            lines[7]["frame_value"].clone()
+        ),
+        (3.into(), 5.into())
+    );
+    assert_eq!(lines[8]["pos"], 1 + (2 << 7));
+    assert_eq!(lines[17]["data"], serde_json::json!([0x7E, 0x01]));
+}
+
+#[test]
+fn decode_sysex_has_no_length_limit_and_skips_realtime_bytes() {
+    let mut bytes = vec![0xF0];
+    bytes.extend((0..10_000u32).map(|i| (i % 128) as u8));
+    bytes.insert(5000, 0xF8);
+    bytes.push(0xF7);
+    let (code, out, _) = run(&["decode", "--json"], bytes);
+    assert_eq!(code, 0);
+    let lines = json_lines(&out);
+    assert_eq!(lines[0]["type"], "clock");
+    let data = lines[1]["data"].as_array().unwrap();
+    assert_eq!(data.len(), 10_000);
+    // The clock byte sat at index 5000 of the file, between payload bytes 4998 and 4999.
+    assert_eq!(data[4998], 4998 % 128);
+    assert_eq!(data[4999], 4999 % 128);
+}
+
+#[test]
+fn decode_text_reads_binary_from_a_file_and_ends_with_counters() {
+    let dir = std::env::temp_dir().join(format!("orch-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("in.mid.raw");
+    std::fs::write(&file, [0x3C, 0x90, 0x3C, 0x7F, 0x91, 0x40]).unwrap();
+    let out = orch().args(["decode"]).arg(&file).output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("Note on"), "{text}");
+    assert!(
+        text.lines()
+            .last()
+            .unwrap()
+            .contains("6 bytes, 1 messages, 1 dropped, 0 abandoned"),
+        "{text}"
+    );
+}
+
+#[test]
+fn bad_hex_and_missing_files_exit_2_with_a_clear_message() {
+    let (code, _, err) = run(&["decode", "--hex"], "90 3C\n9G");
+    assert_eq!(code, 2);
+    assert!(err.contains("line 2"), "{err}");
+    let (code, _, err) = run(&["interpret", "/no/such/file"], "");
+    assert_eq!(code, 2);
+    assert!(err.contains("/no/such/file"), "{err}");
+    let (code, _, _) = run(&["decode", "--no-such-flag"], "");
+    assert_eq!(code, 2);
+}
+
+#[test]
+fn interpret_json_writes_one_board_per_change_and_ends_with_final_state() {
+    // Table 3, then a Note-Off for 64 and a note below the keyboard (24 folds to 36).
+    let hex = "90 3C 7F 90 40 7F 90 43 7F 80 40 00 90 18 7F";
+    let (code, out, _) = run(&["interpret", "--hex", "--json"], hex);
+    assert_eq!(code, 0);
+    let lines = json_lines(&out);
+    let want = [
+        r#"{"t_us":640,"byte":2,"address":34,"outputs":256}"#,
+        r#"{"t_us":1600,"byte":5,"address":34,"outputs":4352}"#,
+        r#"{"t_us":2560,"byte":8,"address":34,"outputs":37120}"#,
+        r#"{"t_us":3520,"byte":11,"address":34,"outputs":33024}"#,
+        r#"{"t_us":4480,"byte":14,"address":33,"outputs":1}"#,
+        r#"{"type":"final","boards":[{"address":33,"outputs":1},{"address":34,"outputs":33024},{"address":35,"outputs":0},{"address":36,"outputs":0}]}"#,
+    ];
+    assert_eq!(lines.len(), want.len(), "{}", String::from_utf8_lossy(&out));
+    for (got, want) in lines.iter().zip(want) {
+        assert_eq!(got, &serde_json::from_str::<Value>(want).unwrap());
+    }
+}
+
+#[test]
+fn interpret_guard_delays_a_repeated_note_and_guard_off_does_not() {
+    // On, off, on again 1 ms later: the guard makes the key rest 60 ms first.
+    let hex = "90 3C 7F 80 3C 00 90 3C 7F";
+    let mut long = String::from(hex);
+    // Active-sensing bytes keep the line alive past the 60 ms gap (64 ms of bytes).
+    for _ in 0..200 {
+        long.push_str(" FE");
+    }
+    let (_, out, _) = run(&["interpret", "--hex", "--json"], long.clone());
+    let lines = json_lines(&out);
+    let strike = lines
+        .iter()
+        .find(|l| l["byte"].is_null() && l["outputs"] == 256)
+        .expect("a timer strike");
+    assert_eq!(
+        strike["t_us"],
+        1600 + 60_000,
+        "rests the whole gap after its release"
+    );
+
+    let (_, out, _) = run(&["interpret", "--hex", "--json", "--guard", "off"], hex);
+    let lines = json_lines(&out);
+    assert_eq!(lines[2]["byte"], 8);
+    assert_eq!(lines[2]["outputs"], 256);
+}
+
+#[test]
+fn interpret_text_shows_fingers_and_stats() {
+    let (code, out, _) = run(&["interpret", "--hex"], "90 3C 7F");
+    assert_eq!(code, 0);
+    let text = String::from_utf8_lossy(&out);
+    assert!(
+        text.contains("0x22 <- 0x0100  |........#.......|"),
+        "{text}"
+    );
+    assert!(text.contains("1 notes: 1 played"), "{text}");
+    assert!(text.contains("# final: 0x21=0x0000 0x22=0x0100"), "{text}");
+}
+
+#[test]
+fn robot_file_changes_the_mapping_and_a_bad_one_names_the_field() {
+    let dir = std::env::temp_dir().join(format!("orch-robot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let good = dir.join("robot.toml");
+    std::fs::write(
+        &good,
+        "[keys]\nlow = 60\nhigh = 71\nout_of_range = \"drop\"\nchannels = [2]\n\n[[boards]]\naddress = 0x20\nkeys = 12\nfirst_bit = 4\n",
+    )
+    .unwrap();
+    let out = orch()
+        .args(["interpret", "--hex", "--json", "--robot"])
+        .arg(&good)
+        .write_stdin("91 3D 7F 90 3D 7F 91 48 7F")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lines = json_lines(&out.stdout);
+    assert_eq!(lines.len(), 2, "only channel 2's in-range note plays");
+    assert_eq!(lines[0]["address"], 0x20);
+    assert_eq!(lines[0]["outputs"], 1 << 5);
+
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "[guard]\nrestrike_gap = \"soon\"\n").unwrap();
+    let out = orch()
+        .args(["interpret", "--robot"])
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("guard.restrike_gap") && err.contains("bad.toml"),
+        "{err}"
+    );
+}
+
+#[test]
+fn config_prints_a_commented_default_that_reads_back() {
+    let out = orch().arg("config").output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("# orch robot configuration"));
+    let dir = std::env::temp_dir().join(format!("orch-config-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("robot.toml");
+    std::fs::write(&file, text.as_bytes()).unwrap();
+    let out = orch()
+        .args(["interpret", "--hex", "--json", "--robot"])
+        .arg(&file)
+        .write_stdin("90 60 7F")
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert_eq!(json_lines(&out.stdout)[0]["address"], 0x24);
+}
