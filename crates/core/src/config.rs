@@ -179,7 +179,9 @@ impl<const B: usize> Config<B> {
         let g = &self.guard;
         if g.enabled {
             let too_long = |d: Option<Duration>| d.is_some_and(|d| d > MAX_LIMIT);
-            if too_long(g.max_hold) || too_long(g.watchdog) || g.restrike_gap > MAX_LIMIT
+            if too_long(g.max_hold)
+                || too_long(g.watchdog)
+                || g.restrike_gap > MAX_LIMIT
                 || g.min_press > MAX_LIMIT
             {
                 return Err(ConfigError::LimitTooLong);

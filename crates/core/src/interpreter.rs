@@ -6,6 +6,7 @@ use crate::fingers::{
     Fingers, AGE_CAP, DOWN, FOLDED, PENDING, READY, RELEASE_AFTER, RELEASING, SUSTAINED,
 };
 use crate::frame::{FingerFrame, FlushError};
+use crate::held::{HeldNotes, NoteTable};
 use crate::message::Message;
 use crate::output::FingerBoards;
 use crate::stats::Stats;
@@ -17,9 +18,9 @@ pub const ACTIVE_SENSING_TIMEOUT: Duration = Duration::from_millis(300);
 
 /// Turns MIDI into finger-board outputs, safely.
 ///
-/// `B` is the number of finger boards and `K` the most keys it can serve (the default, 61,
-/// is the thesis's keyboard). For the thesis's robot it needs under 800 bytes of RAM (the
-/// crate docs give the breakdown).
+/// `B` is the number of finger boards, `K` the most keys it can serve (the default, 61, is the
+/// thesis's keyboard) and `H` the store of held notes ([`NoteTable`] by default;
+/// [`NotePool`](crate::NotePool) on small MCUs). The crate docs give the RAM figures.
 ///
 /// Feed it bytes with [`feed`](Self::feed) (or decoded messages with
 /// [`handle`](Self::handle)), call [`tick`](Self::tick) when no input arrives (at the latest at
@@ -31,11 +32,11 @@ pub const ACTIVE_SENSING_TIMEOUT: Duration = Duration::from_millis(300);
 /// released: the same note on two channels, or two notes folded onto one key. A Note-On for a
 /// note that is already on (the same channel and note, no Note-Off between) re-strikes the key.
 #[derive(Clone, Debug)]
-pub struct Interpreter<const B: usize = 4, const K: usize = 61> {
+pub struct Interpreter<const B: usize = 4, const K: usize = 61, H: HeldNotes = NoteTable> {
     config: Config<B>,
     decoder: Decoder,
-    /// For each note, the channels holding it.
-    notes: [u16; 128],
+    /// The notes that are on, and the keys they hold.
+    notes: H,
     fingers: Fingers<K>,
     frame: FingerFrame<B>,
     /// Channels whose sustain pedal is down.
@@ -64,7 +65,7 @@ impl Default for Interpreter<4, 61> {
     }
 }
 
-impl<const B: usize, const K: usize> Interpreter<B, K> {
+impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     /// An interpreter for `config`, with every key up, at time zero.
     pub fn new(config: Config<B>) -> Result<Self, ConfigError> {
         config.validate(K)?;
@@ -75,7 +76,7 @@ impl<const B: usize, const K: usize> Interpreter<B, K> {
         Self {
             config,
             decoder: Decoder::new(),
-            notes: [0; 128],
+            notes: H::EMPTY,
             fingers: Fingers::new(),
             frame: FingerFrame::new(),
             pedals: 0,
@@ -360,25 +361,27 @@ impl<const B: usize, const K: usize> Interpreter<B, K> {
         if folded {
             self.stats.folded_octaves += of.octaves.unsigned_abs() as u32;
         }
-        let repeated = self.notes[note.get() as usize] & channel.bit() != 0;
+        let repeated = self.notes.contains(channel, note);
         let phase = self.fingers.phase(key);
         let busy = phase == DOWN || phase == PENDING;
         if busy && !repeated && self.held(key) {
             // Another note holds the key already: this one joins it.
-            self.notes[note.get() as usize] |= channel.bit();
-            self.count_sounded(folded);
+            if self.notes.insert(channel, note, key) {
+                self.count_sounded(folded);
+            } else {
+                self.stats.dropped_power += 1;
+            }
             return;
         }
         // A fresh strike, or a re-strike of a key that is down only by the pedal or by this
         // very note again.
-        if !busy && self.config.guard.enabled {
-            let g = &self.config.guard;
-            if self.fingers.down + self.fingers.pending >= g.max_keys_down {
-                self.stats.dropped_power += 1;
-                return;
-            }
+        let over_budget = !busy
+            && self.config.guard.enabled
+            && self.fingers.down + self.fingers.pending >= self.config.guard.max_keys_down;
+        if over_budget || !self.notes.insert(channel, note, key) {
+            self.stats.dropped_power += 1;
+            return;
         }
-        self.notes[note.get() as usize] |= channel.bit();
         self.fingers.set_flag(key, SUSTAINED, false);
         if phase == PENDING {
             // Still waiting: the earlier note merges into the strike, which is now this note's.
@@ -397,11 +400,9 @@ impl<const B: usize, const K: usize> Interpreter<B, K> {
     }
 
     fn note_off(&mut self, channel: Channel, note: Note, now: Instant) {
-        let slot = &mut self.notes[note.get() as usize];
-        if *slot & channel.bit() == 0 {
+        if !self.notes.remove(channel, note) {
             return;
         }
-        *slot &= !channel.bit();
         let Some(of) = self.config.range.key_for(note, self.config.out_of_range) else {
             return;
         };
@@ -434,9 +435,7 @@ impl<const B: usize, const K: usize> Interpreter<B, K> {
     }
 
     fn channel_off(&mut self, channel: Channel, now: Instant) {
-        for slot in self.notes.iter_mut() {
-            *slot &= !channel.bit();
-        }
+        self.notes.remove_channel(channel);
         self.pedals &= !channel.bit();
         let pedal_holds = self.pedals != 0;
         for key in 0..self.keys() {
@@ -452,7 +451,7 @@ impl<const B: usize, const K: usize> Interpreter<B, K> {
     }
 
     fn release_everything(&mut self, now: Instant) {
-        self.notes = [0; 128];
+        self.notes.clear();
         self.pedals = 0;
         for key in 0..self.keys() {
             self.cancel_key(key, now);
@@ -462,24 +461,15 @@ impl<const B: usize, const K: usize> Interpreter<B, K> {
 
     /// Whether any note still holds `key`.
     fn held(&self, key: u8) -> bool {
-        let mut held = false;
-        self.config
-            .range
-            .notes_of(key, self.config.out_of_range, |n| {
-                held |= self.notes[n.get() as usize] != 0
-            });
-        held
+        self.notes
+            .holds_key(key, self.config.range, self.config.out_of_range)
     }
 
     /// Forgets every note holding `key` (after the guard cut it), so its Note-Offs are no-ops
     /// and the next Note-On strikes afresh.
     fn forget_key(&mut self, key: u8) {
-        let notes = &mut self.notes;
-        self.config
-            .range
-            .notes_of(key, self.config.out_of_range, |n| {
-                notes[n.get() as usize] = 0
-            });
+        self.notes
+            .remove_key(key, self.config.range, self.config.out_of_range);
         self.fingers.set_flag(key, SUSTAINED, false);
     }
 
@@ -547,5 +537,33 @@ impl<const B: usize, const K: usize> Interpreter<B, K> {
         } else {
             self.release_key(key, now);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::GuardConfig;
+    use crate::held::NotePool;
+
+    /// Guards the ATmega16 RAM budget stated in the crate docs.
+    #[test]
+    fn interpreter_fits_the_stated_ram_figures() {
+        assert!(core::mem::size_of::<Interpreter>() <= 792);
+        assert!(core::mem::size_of::<Interpreter<4, 61, NotePool<32>>>() <= 640);
+    }
+
+    #[test]
+    fn a_full_note_pool_refuses_the_note_and_counts_it() {
+        let config = Config {
+            guard: GuardConfig::OFF,
+            ..Config::THESIS
+        };
+        let mut i = Interpreter::<4, 61, NotePool<2>>::new(config).unwrap();
+        i.feed_slice(&[0x90, 60, 1, 61, 1, 62, 1], Instant::ZERO);
+        assert_eq!(i.keys_down(), 2);
+        assert_eq!(i.stats().dropped_power, 1);
+        i.feed_slice(&[0x80, 62, 0, 60, 0], Instant::ZERO);
+        assert_eq!(i.keys_down(), 1);
     }
 }

@@ -10,6 +10,8 @@
 //! - [`Interpreter`]: decoded messages plus the current time in, a [`FingerFrame`] out. Maps
 //!   notes to keys ([`KeyRange`], [`OutOfRange`]) and keys to fingers ([`Layout`]), keeps track
 //!   of which notes hold each key, and runs the safety guard ([`GuardConfig`]).
+//! - [`HeldNotes`]: where the interpreter records which notes are on ([`NoteTable`] on hosts,
+//!   [`NotePool`] on small MCUs).
 //! - [`FingerBoards`]: the one output trait, implemented by real boards (`orch-boards`), the
 //!   virtual robot and the [`Recording`] test double.
 //!
@@ -32,12 +34,19 @@
 //! ## Memory
 //!
 //! Sized for the thesis's ATmega16 (1 KB of SRAM for everything, stack included). For 4 boards
-//! and 61 keys, [`Interpreter`] (decoder and guard included) takes **792 bytes** on a 64-bit
-//! host, padding included (a test checks the figure), and about 780 on AVR, which has no
-//! padding: 256 for which channels hold each of the 128 notes (the exact release rules need
-//! them), 366 for the 61 keys' phase, 32-bit timestamp and velocity, and the rest for the
-//! configuration (44), counters (48), frame (16), clock and decoder state (28). The [`Decoder`]
-//! alone takes 28 bytes.
+//! and 61 keys, on a 64-bit host with its padding (tests check both figures):
+//!
+//! | part | bytes |
+//! |---|---|
+//! | the 61 keys' phase, 32-bit timestamp and velocity (the guard's memory) | 366 |
+//! | held notes, [`NoteTable`] (the default: every channel of every note, exact under any load) | 256 |
+//! | held notes, [`NotePool<32>`](NotePool) (for MCUs: 32 notes at once, twice the power budget) | 97 |
+//! | configuration 48, counters 48, frame 16, decoder 28, clock and pedals 32 | ≈ 170 |
+//! | **[`Interpreter`] with [`NoteTable`]** | **792** |
+//! | **`Interpreter<4, 61, NotePool<32>>`** | **640** |
+//!
+//! AVR has no padding, so the ATmega16 figures are a few bytes lower. The [`Decoder`] alone
+//! takes 28 bytes.
 //!
 //! ## Cargo features
 //!
@@ -50,6 +59,7 @@ mod config;
 mod decoder;
 mod fingers;
 mod frame;
+mod held;
 mod interpreter;
 mod keymap;
 mod message;
@@ -62,6 +72,7 @@ mod values;
 pub use config::{Config, ConfigError, GuardConfig, MAX_LIMIT};
 pub use decoder::{Counters, Decoded, Decoder};
 pub use frame::{FingerFrame, FlushError};
+pub use held::{HeldNotes, NotePool, NoteTable};
 pub use interpreter::{Interpreter, ACTIVE_SENSING_TIMEOUT};
 pub use keymap::{BoardSpan, Finger, KeyOf, KeyRange, Layout, OutOfRange};
 pub use message::Message;
