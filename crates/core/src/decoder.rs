@@ -41,32 +41,31 @@ pub struct Counters {
 /// [`Message::SysExStart`] of a new SysEx).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Decoded {
-    slots: [Option<Message>; 2],
-    next: u8,
+    first: Option<Message>,
+    second: Option<Message>,
 }
 
 impl Decoded {
     fn push(&mut self, message: Message) {
-        let slot = if self.slots[0].is_none() { 0 } else { 1 };
-        self.slots[slot] = Some(message);
+        if self.first.is_none() {
+            self.first = Some(message);
+        } else {
+            self.second = Some(message);
+        }
     }
 }
 
 impl Iterator for Decoded {
     type Item = Message;
     fn next(&mut self) -> Option<Message> {
-        while (self.next as usize) < self.slots.len() {
-            let slot = self.slots[self.next as usize].take();
-            self.next += 1;
-            if slot.is_some() {
-                return slot;
-            }
+        match self.first.take() {
+            Some(m) => Some(m),
+            None => self.second.take(),
         }
-        None
     }
 }
 
-/// A MIDI 1.0 byte-stream decoder: `no_std`, allocation-free, 20 bytes of state plus the
+/// A MIDI 1.0 byte-stream decoder: `no_std`, allocation-free, 28 bytes of state plus the
 /// optional System Exclusive buffer of `SYSEX` bytes.
 ///
 /// With `SYSEX > 0`, the first `SYSEX` data bytes of the latest System Exclusive message are
@@ -80,6 +79,8 @@ pub struct Decoder<const SYSEX: usize = 0> {
     data: [u8; 2],
     /// How many of `data` are filled.
     have: u8,
+    /// How many data bytes the current status takes.
+    need: u8,
     /// A message has begun (status or first running-status data byte) and is not complete.
     pending: bool,
     /// Inside a System Exclusive message.
@@ -115,6 +116,7 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
             status: 0,
             data: [0; 2],
             have: 0,
+            need: 0,
             pending: false,
             in_sysex: false,
             sysex_len: 0,
@@ -155,36 +157,40 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
     /// Feeds every byte of `bytes`, calling `emit` for each message in order.
     pub fn push_slice(&mut self, bytes: &[u8], mut emit: impl FnMut(Message)) {
         for &byte in bytes {
-            for message in self.push(byte) {
-                emit(message);
-            }
+            self.step(byte, &mut emit);
         }
     }
 
     /// Feeds one byte and returns the messages it completes.
     pub fn push(&mut self, byte: u8) -> Decoded {
-        self.counters.bytes = self.counters.bytes.wrapping_add(1);
         let mut out = Decoded::default();
-        if byte >= 0xF8 {
-            if let Some(message) = realtime(byte) {
-                self.emit(&mut out, message);
-            }
-        } else if byte >= 0x80 {
-            self.status_byte(byte, &mut out);
-        } else {
-            self.data_byte(byte, &mut out);
-        }
+        self.step(byte, &mut |m| out.push(m));
         out
     }
 
-    fn emit(&mut self, out: &mut Decoded, message: Message) {
+    #[inline(always)]
+    fn step<F: FnMut(Message)>(&mut self, byte: u8, emit: &mut F) {
+        self.counters.bytes = self.counters.bytes.wrapping_add(1);
+        if byte < 0x80 {
+            self.data_byte(byte, emit);
+        } else if byte >= 0xF8 {
+            if let Some(message) = realtime(byte) {
+                self.emit(emit, message);
+            }
+        } else {
+            self.status_byte(byte, emit);
+        }
+    }
+
+    #[inline(always)]
+    fn emit<F: FnMut(Message)>(&mut self, emit: &mut F, message: Message) {
         if message != Message::SysExStart {
             self.counters.messages = self.counters.messages.wrapping_add(1);
         }
-        out.push(message);
+        emit(message);
     }
 
-    fn status_byte(&mut self, byte: u8, out: &mut Decoded) {
+    fn status_byte<F: FnMut(Message)>(&mut self, byte: u8, out: &mut F) {
         if self.in_sysex {
             self.in_sysex = false;
             let terminated = byte == 0xF7;
@@ -207,6 +213,7 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
         match byte {
             0x80..=0xEF | 0xF1..=0xF3 => {
                 self.status = byte;
+                self.need = data_len(byte);
                 self.pending = true;
             }
             0xF0 => {
@@ -220,7 +227,8 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
         }
     }
 
-    fn data_byte(&mut self, byte: u8, out: &mut Decoded) {
+    #[inline(always)]
+    fn data_byte<F: FnMut(Message)>(&mut self, byte: u8, out: &mut F) {
         if self.in_sysex {
             if let Some(slot) = self.sysex.get_mut(self.sysex_len as usize) {
                 *slot = byte;
@@ -233,9 +241,9 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
             return;
         }
         self.pending = true;
-        self.data[self.have as usize] = byte;
+        self.data[self.have as usize & 1] = byte;
         self.have += 1;
-        if self.have < data_len(self.status) {
+        if self.have < self.need {
             return;
         }
         self.have = 0;

@@ -16,6 +16,9 @@ use crate::values::{Channel, Note, Velocity};
 /// The specification's Active Sensing timeout: 300 ms.
 pub const ACTIVE_SENSING_TIMEOUT: Duration = Duration::from_millis(300);
 
+/// `due` when no per-key timer runs.
+const NEVER: Instant = Instant::from_micros(u64::MAX);
+
 /// Turns MIDI into finger-board outputs, safely.
 ///
 /// `B` is the number of finger boards, `K` the most keys it can serve (the default, 61, is the
@@ -47,7 +50,7 @@ pub struct Interpreter<const B: usize = 4, const K: usize = 61, H: HeldNotes = N
     last_input: Instant,
     /// An Active Sensing byte was seen and the 300 ms rule is in force.
     sensing: bool,
-    /// No per-key deadline falls before this.
+    /// No per-key deadline falls before this ([`NEVER`] if none runs).
     due: Instant,
     stats: Stats,
 }
@@ -83,7 +86,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             clock: Instant::ZERO,
             last_input: Instant::ZERO,
             sensing: false,
-            due: Instant::ZERO,
+            due: NEVER,
             stats: Stats {
                 note_ons: 0,
                 played: 0,
@@ -180,42 +183,26 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         self.release_everything(now);
     }
 
-    /// The earliest time at which [`tick`](Self::tick) has something to do, if any: a hold
-    /// limit, a delayed re-strike, the watchdog.
+    /// When [`tick`](Self::tick) should next be called: the earliest hold limit, delayed
+    /// re-strike, short press or watchdog deadline, or `None` if no timer is running.
+    ///
+    /// O(1): the per-key deadlines are kept as they change. The answer is never later than
+    /// the first thing to do; it can be earlier (a key released in the meantime), in which case
+    /// that tick does nothing and the next call answers anew.
     pub fn next_deadline(&self) -> Option<Instant> {
         let g = &self.config.guard;
         if !g.enabled {
             return None;
         }
-        let mut next: Option<Instant> = None;
-        let mut consider = |t: Instant| {
-            next = Some(next.map_or(t, |n: Instant| n.min(t)));
-        };
-        let busy = self.fingers.down + self.fingers.pending > 0;
-        if busy {
+        let mut next = (self.due != NEVER).then_some(self.due);
+        if self.fingers.down + self.fingers.pending > 0 {
+            let mut consider = |t: Instant| next = Some(next.map_or(t, |n| n.min(t)));
             if let Some(wd) = g.watchdog {
                 consider(self.last_input + wd);
             }
             if self.sensing {
                 consider(self.last_input + ACTIVE_SENSING_TIMEOUT);
             }
-        }
-        for key in 0..self.keys() {
-            let limit = match self.fingers.phase(key) {
-                DOWN if self.fingers.has(key, RELEASE_AFTER) => match g.max_hold {
-                    Some(hold) => hold.min(g.min_press),
-                    None => g.min_press,
-                },
-                DOWN => match g.max_hold {
-                    Some(hold) => hold,
-                    None => continue,
-                },
-                PENDING => g.restrike_gap,
-                _ => continue,
-            };
-            let age = self.fingers.age(key, self.clock) as u64;
-            let since = Instant::from_micros(self.clock.as_micros().saturating_sub(age));
-            consider(since + limit);
         }
         next
     }
@@ -242,7 +229,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         if now < self.due {
             return;
         }
-        let mut due = Instant::from_micros(u64::MAX);
+        let mut due = NEVER;
         for key in 0..self.keys() {
             let age = self.fingers.age(key, now);
             match self.fingers.phase(key) {

@@ -14,6 +14,9 @@
 //! piano-midi.de performance, CC BY-SA 3.0 DE), or the path in `ORCH_BENCH_MIDI`. Without it,
 //! a synthetic stream of the same kind is made, and the output says so.
 
+// Each bench uses a different part of this module.
+#![allow(dead_code)]
+
 use std::path::PathBuf;
 
 use midly::live::LiveEvent;
