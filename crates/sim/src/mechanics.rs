@@ -1,0 +1,367 @@
+//! Solenoids, fingers and keys: from time-stamped pin edges to the sounds a listener hears.
+//!
+//! [`Mechanics`] is a pure state machine, one per instrument, fed with `(time, key, high/low)`
+//! edges in time order ([`Mechanics::edge`]) and closed with [`Mechanics::finish`]. Each key has
+//! three figures ([`KeyMechanics`]), with one default for all keys and per-key overrides:
+//!
+//! - `press_delay`: from the pin going high until the hammer reaches the string (the key sounds);
+//! - `release_delay`: from the pin going low until the key is fully up again;
+//! - `min_hold`: the shortest pulse that reaches the string.
+//!
+//! ## Rules, exactly
+//!
+//! Let the pin go high at `t1` and low at `t2`.
+//!
+//! 1. If `t2 − t1 ≥ min_hold`, the key sounds: a key-down event at `t1 + press_delay`. This holds
+//!    even when `t2 < t1 + press_delay`: once the finger was driven for `min_hold` the strike is
+//!    committed and the key sounds at `t1 + press_delay` anyway. (The event is decided at `t2`,
+//!    and stamped with its own time, which may lie before or after `t2`.)
+//! 2. If `t2 − t1 < min_hold`, the pulse does not reach the string: no event, counted in
+//!    [`MechanicsStats::short_pulses`].
+//! 3. A key that sounded is fully up again at `t2 + release_delay`, never before its own key-down
+//!    time: the key-up event is at `max(t2 + release_delay, key-down time)`.
+//! 4. A press that begins (`t3`, pin high) while a sounded key has not yet fully returned
+//!    (`t3 <` its key-up time) is a **smear**: the key never came up, so the pending key-up is
+//!    cancelled, [`MechanicsStats::smeared_presses`] counts it, and if it is held `min_hold` its
+//!    key-down event carries `smeared: true` (counted in [`MechanicsStats::smeared_onsets`]),
+//!    not a clean onset. The key-up comes only when the key finally returns.
+//! 5. A press at or after the key-up time is a clean re-strike: key-up event, then a clean
+//!    key-down ([`MechanicsStats::clean_onsets`]).
+//!
+//! So for every key the events alternate down, (smeared down…), up; clean onsets are the
+//! key-down events with `smeared == false`.
+//!
+//! A short pulse (rule 2) on a key at rest moves the finger too little to matter: the key counts
+//! as up at once. A short pulse during a smear keeps the key from returning, like any press.
+//!
+//! [`Mechanics::finish`] takes every pin still high as going low at the end (counted in
+//! [`MechanicsStats::stuck_at_end`]) and emits every pending key-up, even past the end, so every
+//! key-down has its key-up.
+
+use std::collections::BTreeMap;
+
+use orch_core::Duration;
+use serde::Serialize;
+
+use crate::bus::SimTime;
+
+/// The mechanical figures of one key.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct KeyMechanics {
+    /// From the pin going high until the key sounds.
+    pub press_delay: Duration,
+    /// From the pin going low until the key is fully up again.
+    pub release_delay: Duration,
+    /// The shortest time the pin must stay high for the key to sound.
+    pub min_hold: Duration,
+}
+
+impl KeyMechanics {
+    /// 15 ms to strike, 25 ms to return, 8 ms shortest pulse that sounds.
+    pub const DEFAULT: Self = Self {
+        press_delay: Duration::from_millis(15),
+        release_delay: Duration::from_millis(25),
+        min_hold: Duration::from_millis(8),
+    };
+}
+
+impl Default for KeyMechanics {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// The figures of every key: a default and per-key overrides.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Hash)]
+pub struct MechanicsConfig {
+    /// Figures of every key without an override.
+    pub default: KeyMechanics,
+    /// Per-key figures, by key index (0 = lowest key).
+    pub overrides: BTreeMap<u8, KeyMechanics>,
+}
+
+impl MechanicsConfig {
+    /// Every key with the same figures.
+    pub fn uniform(default: KeyMechanics) -> Self {
+        Self {
+            default,
+            overrides: BTreeMap::new(),
+        }
+    }
+
+    /// The same, with `key` given its own figures.
+    pub fn with_key(mut self, key: u8, figures: KeyMechanics) -> Self {
+        self.overrides.insert(key, figures);
+        self
+    }
+
+    /// The figures of `key`.
+    pub fn for_key(&self, key: u8) -> KeyMechanics {
+        self.overrides.get(&key).copied().unwrap_or(self.default)
+    }
+}
+
+/// Key-down (the key sounds) or key-up (the key is fully up again).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SoundKind {
+    /// The hammer reaches the string.
+    Down,
+    /// The key is fully up again.
+    Up,
+}
+
+/// One thing a listener hears (or the key's return).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+pub struct SoundEvent {
+    /// When.
+    pub time: SimTime,
+    /// Key index, 0 = lowest key.
+    pub key: u8,
+    /// Down or up.
+    pub kind: SoundKind,
+    /// A key-down from a press that began before the key had fully returned: not a clean
+    /// onset. Always `false` for key-up events.
+    pub smeared: bool,
+}
+
+/// What the mechanics counted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
+pub struct MechanicsStats {
+    /// Key-down events from a key that was fully up.
+    pub clean_onsets: u64,
+    /// Presses that began before the key had fully returned (rule 4), sounding or not.
+    pub smeared_presses: u64,
+    /// Key-down events from smeared presses.
+    pub smeared_onsets: u64,
+    /// Pulses shorter than `min_hold`.
+    pub short_pulses: u64,
+    /// Key-up events.
+    pub key_ups: u64,
+    /// Pins still high when [`Mechanics::finish`] was called.
+    pub stuck_at_end: u64,
+    /// Edges for keys past the last key, ignored.
+    pub ignored_edges: u64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum KeyState {
+    /// Fully up.
+    Up,
+    /// Pin high since `since`.
+    Pressing {
+        since: SimTime,
+        smeared: bool,
+        was_sounding: bool,
+    },
+    /// Pin low; the sounded key is fully up at `returns_at`.
+    Returning { returns_at: SimTime },
+}
+
+/// The solenoid and key state machine. See the [module notes](self) for the rules.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Mechanics {
+    figures: Vec<KeyMechanics>,
+    state: Vec<KeyState>,
+    last_down: Vec<SimTime>,
+    events: Vec<SoundEvent>,
+    stats: MechanicsStats,
+}
+
+impl Mechanics {
+    /// `keys` keys at rest, with their figures from `config`.
+    pub fn new(keys: usize, config: &MechanicsConfig) -> Self {
+        Self {
+            figures: (0..keys).map(|k| config.for_key(k as u8)).collect(),
+            state: vec![KeyState::Up; keys],
+            last_down: vec![SimTime::ZERO; keys],
+            events: Vec::new(),
+            stats: MechanicsStats::default(),
+        }
+    }
+
+    /// How many keys.
+    pub fn keys(&self) -> usize {
+        self.state.len()
+    }
+
+    /// The figures of `key`.
+    pub fn figures(&self, key: u8) -> Option<KeyMechanics> {
+        self.figures.get(key as usize).copied()
+    }
+
+    /// The counters so far.
+    pub fn stats(&self) -> MechanicsStats {
+        self.stats
+    }
+
+    /// The events decided so far, in the order they were decided (not always time order;
+    /// [`finish`](Self::finish) sorts them).
+    pub fn events(&self) -> &[SoundEvent] {
+        &self.events
+    }
+
+    /// Whether `key`'s pin is high.
+    pub fn pin_high(&self, key: u8) -> bool {
+        matches!(
+            self.state.get(key as usize),
+            Some(KeyState::Pressing { .. })
+        )
+    }
+
+    fn emit(&mut self, time: SimTime, key: u8, kind: SoundKind, smeared: bool) {
+        self.events.push(SoundEvent {
+            time,
+            key,
+            kind,
+            smeared,
+        });
+    }
+
+    /// `key`'s pin went high (`true`) or low at `time`. Edges must come in time order; an edge
+    /// to the level the pin already has is ignored.
+    pub fn edge(&mut self, time: SimTime, key: u8, high: bool) {
+        let k = key as usize;
+        if k >= self.state.len() {
+            self.stats.ignored_edges += 1;
+            return;
+        }
+        let figures = self.figures[k];
+        match (self.state[k], high) {
+            (KeyState::Up, true) => {
+                self.state[k] = KeyState::Pressing {
+                    since: time,
+                    smeared: false,
+                    was_sounding: false,
+                };
+            }
+            (KeyState::Returning { returns_at }, true) => {
+                if time >= returns_at {
+                    self.emit(returns_at, key, SoundKind::Up, false);
+                    self.stats.key_ups += 1;
+                    self.state[k] = KeyState::Pressing {
+                        since: time,
+                        smeared: false,
+                        was_sounding: false,
+                    };
+                } else {
+                    self.stats.smeared_presses += 1;
+                    self.state[k] = KeyState::Pressing {
+                        since: time,
+                        smeared: true,
+                        was_sounding: true,
+                    };
+                }
+            }
+            (
+                KeyState::Pressing {
+                    since,
+                    smeared,
+                    was_sounding,
+                },
+                false,
+            ) => {
+                let sounding =
+                    if time.nanos_since(since) >= figures.min_hold.as_micros() as u64 * 1_000 {
+                        let down = since + figures.press_delay;
+                        self.emit(down, key, SoundKind::Down, smeared);
+                        if smeared {
+                            self.stats.smeared_onsets += 1;
+                        } else {
+                            self.stats.clean_onsets += 1;
+                        }
+                        self.last_down[k] = down;
+                        true
+                    } else {
+                        self.stats.short_pulses += 1;
+                        was_sounding
+                    };
+                self.state[k] = if sounding {
+                    KeyState::Returning {
+                        returns_at: (time + figures.release_delay).max(self.last_down[k]),
+                    }
+                } else {
+                    KeyState::Up
+                };
+            }
+            // Same level again: nothing moves.
+            (KeyState::Pressing { .. }, true)
+            | (KeyState::Up, false)
+            | (KeyState::Returning { .. }, false) => {}
+        }
+    }
+
+    /// Closes the performance at `end`: every pin still high goes low at `end` (or at its
+    /// press, if later), every pending key-up is emitted. Returns every event so far, sorted by
+    /// time (events at the same time keep the order they were decided in), and leaves every key
+    /// at rest with no events.
+    pub fn finish(&mut self, end: SimTime) -> Vec<SoundEvent> {
+        for k in 0..self.state.len() {
+            if let KeyState::Pressing { since, .. } = self.state[k] {
+                self.stats.stuck_at_end += 1;
+                self.edge(end.max(since), k as u8, false);
+            }
+            if let KeyState::Returning { returns_at } = self.state[k] {
+                self.emit(returns_at, k as u8, SoundKind::Up, false);
+                self.stats.key_ups += 1;
+            }
+            self.state[k] = KeyState::Up;
+        }
+        let mut events = core::mem::take(&mut self.events);
+        events.sort_by_key(|e| e.time);
+        events
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ms(t: u64) -> SimTime {
+        SimTime::from_millis(t)
+    }
+
+    #[test]
+    fn committed_strike_sounds_after_an_early_release() {
+        // Held 10 ms ≥ min_hold 8 ms, released before the 15 ms press delay: still sounds at 15.
+        let mut m = Mechanics::new(1, &MechanicsConfig::default());
+        m.edge(ms(0), 0, true);
+        m.edge(ms(10), 0, false);
+        let ev = m.finish(ms(100));
+        assert_eq!(ev[0].time, ms(15));
+        assert_eq!(ev[0].kind, SoundKind::Down);
+        assert_eq!(ev[1].time, ms(35));
+    }
+
+    #[test]
+    fn key_up_never_precedes_key_down() {
+        let fig = KeyMechanics {
+            press_delay: Duration::from_millis(30),
+            release_delay: Duration::from_millis(5),
+            min_hold: Duration::from_millis(8),
+        };
+        let mut m = Mechanics::new(1, &MechanicsConfig::uniform(fig));
+        m.edge(ms(0), 0, true);
+        m.edge(ms(10), 0, false);
+        let ev = m.finish(ms(100));
+        assert_eq!((ev[0].time, ev[1].time), (ms(30), ms(30)));
+    }
+
+    #[test]
+    fn finish_releases_a_stuck_pin_and_counts_it() {
+        let mut m = Mechanics::new(2, &MechanicsConfig::default());
+        m.edge(ms(0), 1, true);
+        let ev = m.finish(ms(50));
+        assert_eq!(m.stats().stuck_at_end, 1);
+        assert_eq!(ev.len(), 2);
+        assert_eq!(ev[1].time, ms(75));
+        assert!(m.events().is_empty());
+    }
+
+    #[test]
+    fn edges_past_the_last_key_are_ignored() {
+        let mut m = Mechanics::new(2, &MechanicsConfig::default());
+        m.edge(ms(0), 5, true);
+        assert_eq!(m.stats().ignored_edges, 1);
+    }
+}

@@ -1,0 +1,227 @@
+//! The virtual robot: [`Pca9555`] boards on a [`VirtualBus`], the [`Mechanics`] of the keys,
+//! and a [`Recorder`].
+//!
+//! Drive it through [`orch_core::FingerBoards`] (each [`write_board`](FingerBoards::write_board)
+//! is one I2C write `[0x02, lo, hi]` to the board's address, timed on the bus), or through
+//! [`embedded_hal::i2c::I2c`] on [`VirtualRobot::bus_mut`], as a board driver would. Either way
+//! the robot looks at what the boards actually drive after each transaction (not at what was
+//! asked: an unconfigured board drives nothing) and turns each change into pin edges at the
+//! transaction's completion time, and those into sounds.
+//!
+//! Like the real boards, the models power up with every pin an input: nothing plays until the
+//! boards are configured, by [`VirtualRobot::init`] or by the driver.
+
+use embedded_hal::i2c::I2c;
+use orch_core::{BoardId, BoardSpan, FingerBoards, Layout};
+
+use crate::bus::{BusClock, BusError, SimTime, VirtualBus};
+use crate::mechanics::{Mechanics, MechanicsConfig};
+use crate::pca9555::{Pca9555, CONFIGURATION_0, OUTPUT_PORT_0};
+use crate::recorder::{Performance, PinEdge, Recorder};
+
+/// What the virtual robot is made of.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SimConfig {
+    /// The bus clock.
+    pub clock: BusClock,
+    /// The boards, in key order: address, how many keys, first output bit (as in
+    /// [`orch_core::Layout`]).
+    pub boards: Vec<BoardSpan>,
+    /// The keys' mechanics: a default and per-key overrides.
+    pub mechanics: MechanicsConfig,
+}
+
+impl SimConfig {
+    /// The thesis's robot: 4 boards at 0x21..=0x24 with 16/16/16/13 keys, 83.33 kHz, default
+    /// mechanics.
+    pub fn thesis() -> Self {
+        Self {
+            clock: BusClock::THESIS,
+            boards: Layout::THESIS.boards.to_vec(),
+            mechanics: MechanicsConfig::default(),
+        }
+    }
+
+    /// The same boards as `layout`.
+    pub fn with_layout<const B: usize>(mut self, layout: &Layout<B>) -> Self {
+        self.boards = layout.boards.to_vec();
+        self
+    }
+
+    /// How many keys the boards drive.
+    pub fn keys(&self) -> usize {
+        self.boards.iter().map(|b| b.keys as usize).sum()
+    }
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        Self::thesis()
+    }
+}
+
+/// The virtual robot. See the [module notes](self).
+#[derive(Clone, Debug)]
+pub struct VirtualRobot {
+    config: SimConfig,
+    bus: VirtualBus,
+    /// Per board: the key of each of its 16 bits.
+    pins: Vec<[Option<u8>; 16]>,
+    mechanics: Mechanics,
+    recorder: Recorder,
+    log_seen: usize,
+}
+
+impl VirtualRobot {
+    /// A robot as `config` says, powered up (nothing configured, nothing driven), at time 0.
+    pub fn new(config: SimConfig) -> Self {
+        let mut bus = VirtualBus::new(config.clock);
+        let mut pins = Vec::with_capacity(config.boards.len());
+        let mut first_key = 0usize;
+        for span in &config.boards {
+            bus.attach(Pca9555::new(span.address));
+            let mut map = [None; 16];
+            for i in 0..span.keys as usize {
+                let bit = span.first_bit as usize + i;
+                if bit < 16 {
+                    map[bit] = Some((first_key + i) as u8);
+                }
+            }
+            first_key += span.keys as usize;
+            pins.push(map);
+        }
+        let mechanics = Mechanics::new(first_key, &config.mechanics);
+        Self {
+            config,
+            bus,
+            pins,
+            mechanics,
+            recorder: Recorder::new(),
+            log_seen: 0,
+        }
+    }
+
+    /// The thesis's robot ([`SimConfig::thesis`]).
+    pub fn thesis() -> Self {
+        Self::new(SimConfig::thesis())
+    }
+
+    /// What it is made of.
+    pub fn config(&self) -> &SimConfig {
+        &self.config
+    }
+
+    /// Sets the present (an [`orch_core::Instant`] or a [`SimTime`]): the next write starts no
+    /// earlier. Call it before each flush.
+    pub fn set_time(&mut self, t: impl Into<SimTime>) {
+        self.sync();
+        self.bus.set_time(t);
+    }
+
+    /// Configures every board as a driver would: outputs low (`[0x02, 0, 0]`), then every pin
+    /// an output (`[0x06, 0, 0]`). Two transactions a board, from the present.
+    pub fn init(&mut self) -> Result<(), BusError> {
+        let addresses: Vec<u8> = self.config.boards.iter().map(|b| b.address).collect();
+        let result = addresses.into_iter().try_for_each(|a| {
+            self.bus.write(a, &[OUTPUT_PORT_0, 0, 0])?;
+            self.bus.write(a, &[CONFIGURATION_0, 0, 0])
+        });
+        self.sync();
+        result
+    }
+
+    /// The bus, to look at.
+    pub fn bus(&self) -> &VirtualBus {
+        &self.bus
+    }
+
+    /// The bus, to drive with [`embedded_hal::i2c::I2c`] (set its time with
+    /// [`VirtualBus::set_time`] or [`VirtualRobot::set_time`]). Pin changes made this way reach
+    /// the mechanics at the robot's next call that syncs ([`set_time`](Self::set_time),
+    /// [`write_board`](FingerBoards::write_board), [`sync`](Self::sync),
+    /// [`finish`](Self::finish)), with their own completion times.
+    pub fn bus_mut(&mut self) -> &mut VirtualBus {
+        &mut self.bus
+    }
+
+    /// The model of board `index` (in configuration order).
+    pub fn board(&self, index: usize) -> Option<&Pca9555> {
+        self.config
+            .boards
+            .get(index)
+            .and_then(|s| self.bus.device(s.address))
+    }
+
+    /// The mechanics (call [`sync`](Self::sync) first to see the latest writes).
+    pub fn mechanics(&self) -> &Mechanics {
+        &self.mechanics
+    }
+
+    /// The recorder (call [`sync`](Self::sync) first to see the latest writes).
+    pub fn recorder(&self) -> &Recorder {
+        &self.recorder
+    }
+
+    /// Moves what happened on the bus since the last sync into the recorder and the mechanics.
+    pub fn sync(&mut self) {
+        for w in &self.bus.log()[self.log_seen..] {
+            self.recorder.record_write(w.clone());
+        }
+        self.log_seen = self.bus.log().len();
+        for change in self.bus.take_pin_changes() {
+            let board = self
+                .config
+                .boards
+                .iter()
+                .position(|s| s.address == change.address);
+            let diff = change.before ^ change.after;
+            for bit in 0..16u8 {
+                if diff & (1 << bit) == 0 {
+                    continue;
+                }
+                let high = change.after & (1 << bit) != 0;
+                let key = board.and_then(|b| self.pins[b][bit as usize]);
+                self.recorder.record_edge(PinEdge {
+                    time: change.time,
+                    board: board.map_or(u8::MAX, |b| b as u8),
+                    address: change.address,
+                    bit,
+                    key,
+                    high,
+                });
+                if let Some(key) = key {
+                    self.mechanics.edge(change.time, key, high);
+                }
+            }
+        }
+    }
+
+    /// Ends the performance at `end` (or when the bus falls idle, if later): pins still high
+    /// are taken as released then, every pending key-up is emitted. Returns everything.
+    pub fn finish(mut self, end: impl Into<SimTime>) -> Performance {
+        self.sync();
+        let end = end.into().max(self.bus.free_at());
+        let sounds = self.mechanics.finish(end);
+        self.recorder
+            .finish(end, sounds, self.bus.stats(), self.mechanics.stats())
+    }
+}
+
+impl Default for VirtualRobot {
+    fn default() -> Self {
+        Self::thesis()
+    }
+}
+
+impl FingerBoards for VirtualRobot {
+    type Error = BusError;
+
+    /// One I2C write `[0x02, lo, hi]` to `board.address`, starting at the present or when the
+    /// bus is free. An address with no board fails with [`BusError::AddressNack`].
+    fn write_board(&mut self, board: BoardId, outputs: u16) -> Result<(), BusError> {
+        let [lo, hi] = outputs.to_le_bytes();
+        let result = self.bus.write(board.address, &[OUTPUT_PORT_0, lo, hi]);
+        self.sync();
+        result
+    }
+}
