@@ -7,6 +7,7 @@ use orch_core::{
     BoardSpan, Channel, ChannelMask, Config, Duration, GuardConfig, Interpreter, KeyRange, Layout,
     Note, OutOfRange,
 };
+use orch_sim::{BusClock, KeyMechanics, MechanicsConfig, SimConfig};
 use serde::Deserialize;
 
 use crate::error::bad_input;
@@ -19,11 +20,14 @@ pub const MAX_KEYS: usize = 128;
 /// The interpreter as the host runs it: room for any configuration.
 pub type HostInterpreter = Interpreter<MAX_BOARDS, MAX_KEYS>;
 
-/// A robot: its configuration and how many of the boards are real.
+/// A robot: the interpreter's configuration, how many of the boards are real, the bus clock
+/// and the keys' mechanics.
 #[derive(Clone, Debug)]
 pub struct Robot {
     pub config: Config<MAX_BOARDS>,
     pub boards: usize,
+    pub clock: BusClock,
+    pub mechanics: MechanicsConfig,
 }
 
 impl Robot {
@@ -43,6 +47,20 @@ impl Robot {
     pub fn from_toml(text: &str) -> anyhow::Result<Self> {
         let file: File = toml::from_str(text).map_err(|e| bad_input(e.to_string()))?;
         file.into_robot()
+    }
+
+    /// The virtual robot's configuration.
+    pub fn sim_config(&self) -> SimConfig {
+        SimConfig {
+            clock: self.clock,
+            boards: self.config.layout.boards[..self.boards].to_vec(),
+            mechanics: self.mechanics.clone(),
+        }
+    }
+
+    /// The time one board write takes on the bus: START, 4 bytes of 9 bits, STOP.
+    pub fn write_micros(&self) -> f64 {
+        self.clock.nanos_for_bits(38) as f64 / 1000.0
     }
 
     /// An interpreter for this robot.
@@ -96,6 +114,22 @@ address = 0x24
 keys = 13
 first_bit = 0
 
+# The I2C bus to the boards: "83.33kHz" (the thesis's board), "100kHz" or "400kHz".
+# The PCA9555 and TCA9555 are rated for 400 kHz: a board write then takes 95 us, not 456 us.
+[bus]
+clock = "400kHz"
+
+# How the keys move, for the virtual robot and for latency compensation. press_delay: from
+# the solenoid's power to the key sounding; release_delay: from power off until the key is
+# fully up; min_hold: the shortest pulse that sounds. Keys that differ are listed by note.
+[mechanics]
+press_delay = "15ms"
+release_delay = "25ms"
+min_hold = "8ms"
+# [[mechanics.key]]
+# note = 36
+# press_delay = "20ms"
+
 # The safety guard. Durations are written like "10s", "60ms" or "2min"; "off" means no limit.
 [guard]
 enabled = true
@@ -113,7 +147,85 @@ struct File {
     keys: Keys,
     boards: Option<Vec<Board>>,
     #[serde(default)]
+    bus: Bus,
+    #[serde(default)]
+    mechanics: Mechanics,
+    #[serde(default)]
     guard: Guard,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct Bus {
+    clock: String,
+}
+
+impl Default for Bus {
+    fn default() -> Self {
+        Self {
+            clock: "400kHz".into(),
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct Mechanics {
+    press_delay: String,
+    release_delay: String,
+    min_hold: String,
+    key: Vec<KeyFigures>,
+}
+
+impl Default for Mechanics {
+    fn default() -> Self {
+        Self {
+            press_delay: "15ms".into(),
+            release_delay: "25ms".into(),
+            min_hold: "8ms".into(),
+            key: Vec::new(),
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KeyFigures {
+    note: u8,
+    press_delay: Option<String>,
+    release_delay: Option<String>,
+    min_hold: Option<String>,
+}
+
+/// Parses a bus clock: "83.33kHz", "100kHz", "400kHz" (or any "N kHz" / "N Hz" up to 1 MHz).
+fn clock(text: &str) -> anyhow::Result<BusClock> {
+    let t = text.trim().to_ascii_lowercase().replace(' ', "");
+    let hz = if t == "83.33khz" || t == "83.333khz" {
+        return Ok(BusClock::THESIS);
+    } else if let Some(k) = t.strip_suffix("khz") {
+        k.parse::<f64>().ok().map(|k| k * 1e3)
+    } else if let Some(h) = t.strip_suffix("hz") {
+        h.parse::<f64>().ok()
+    } else {
+        None
+    };
+    match hz {
+        Some(hz) if (1_000.0..=1_000_000.0).contains(&hz) => {
+            Ok(BusClock::from_hz(hz.round() as u32))
+        }
+        _ => Err(bad_input(format!(
+            "bus.clock = {text:?}: write \"83.33kHz\", \"100kHz\" or \"400kHz\" (1 kHz to 1 MHz)"
+        ))),
+    }
+}
+
+/// A duration that must be given (not "off").
+fn delay(field: &str, text: &str) -> anyhow::Result<Duration> {
+    duration(field, text)?.ok_or_else(|| {
+        bad_input(format!(
+            "{field} = \"off\": give a duration such as \"15ms\""
+        ))
+    })
 }
 
 #[derive(Deserialize)]
@@ -333,9 +445,41 @@ impl File {
         config
             .validate(MAX_KEYS)
             .map_err(|e| bad_input(e.to_string()))?;
+        let m = &self.mechanics;
+        let default = KeyMechanics {
+            press_delay: delay("mechanics.press_delay", &m.press_delay)?,
+            release_delay: delay("mechanics.release_delay", &m.release_delay)?,
+            min_hold: delay("mechanics.min_hold", &m.min_hold)?,
+        };
+        let mut mechanics = MechanicsConfig::uniform(default);
+        for (i, k) in m.key.iter().enumerate() {
+            let field = |name: &str| format!("mechanics.key[{i}].{name}");
+            if !(low.get()..=high.get()).contains(&k.note) {
+                return Err(bad_input(format!(
+                    "{} = {}: the robot has keys for notes {}..={} only",
+                    field("note"),
+                    k.note,
+                    low,
+                    high
+                )));
+            }
+            let mut figures = default;
+            if let Some(t) = &k.press_delay {
+                figures.press_delay = delay(&field("press_delay"), t)?;
+            }
+            if let Some(t) = &k.release_delay {
+                figures.release_delay = delay(&field("release_delay"), t)?;
+            }
+            if let Some(t) = &k.min_hold {
+                figures.min_hold = delay(&field("min_hold"), t)?;
+            }
+            mechanics = mechanics.with_key(k.note - low.get(), figures);
+        }
         Ok(Robot {
             config,
             boards: boards.len(),
+            clock: clock(&self.bus.clock)?,
+            mechanics,
         })
     }
 }
@@ -354,6 +498,8 @@ mod tests {
         assert_eq!(r.config.channels, t.channels);
         assert_eq!(&r.config.layout.boards[..4], &t.layout.boards[..]);
         assert_eq!(Robot::from_toml("").unwrap().config, r.config);
+        assert_eq!(r.clock, BusClock::FAST);
+        assert_eq!(r.mechanics, MechanicsConfig::default());
     }
 
     #[test]
@@ -375,6 +521,37 @@ mod tests {
             Robot::from_toml("[[boards]]\naddress = 0x21\nkeys = 16").unwrap_err()
         );
         assert!(e.contains("boards drive 16 keys"), "{e}");
+    }
+
+    #[test]
+    fn bus_clock_and_per_key_mechanics_are_read() {
+        let r = Robot::from_toml(
+            "[bus]\nclock = \"83.33kHz\"\n[mechanics]\npress_delay = \"10ms\"\n[[mechanics.key]]\nnote = 60\nrelease_delay = \"40ms\"\n",
+        )
+        .unwrap();
+        assert_eq!(r.clock, BusClock::THESIS);
+        assert_eq!(
+            r.mechanics.for_key(0).press_delay,
+            Duration::from_millis(10)
+        );
+        assert_eq!(
+            r.mechanics.for_key(24).release_delay,
+            Duration::from_millis(40)
+        );
+        assert_eq!(
+            r.mechanics.for_key(24).press_delay,
+            Duration::from_millis(10)
+        );
+        let e = format!(
+            "{:#}",
+            Robot::from_toml("[[mechanics.key]]\nnote = 20").unwrap_err()
+        );
+        assert!(e.contains("mechanics.key[0].note"), "{e}");
+        let e = format!(
+            "{:#}",
+            Robot::from_toml("[bus]\nclock = \"fast\"").unwrap_err()
+        );
+        assert!(e.contains("bus.clock"), "{e}");
     }
 
     #[test]
