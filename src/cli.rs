@@ -19,6 +19,10 @@ pub enum Command {
     /// Run raw MIDI bytes through the interpreter and the safety guard, and print every board
     /// write as it would go on the bus.
     Interpret(InterpretArgs),
+    /// Play a Standard MIDI File on the virtual robot, live, and report how well it went.
+    Play(PlayArgs),
+    /// Say whether the robot can play a MIDI file, and what will go wrong, without playing it.
+    Analyze(AnalyzeArgs),
     /// Print the default robot configuration (robot.toml), commented.
     Config,
 }
@@ -59,4 +63,43 @@ pub struct InterpretArgs {
 pub enum OnOff {
     On,
     Off,
+}
+
+#[derive(Args, Debug)]
+pub struct PlayArgs {
+    /// The Standard MIDI File.
+    pub file: PathBuf,
+    /// The robot's configuration (see `orch config`); the thesis's robot if not given.
+    #[arg(long, value_name = "FILE")]
+    pub robot: Option<PathBuf>,
+    /// Render on the virtual clock, as fast as possible, instead of in real time.
+    #[arg(long)]
+    pub fast: bool,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Send every message at its score time instead of early by the key's mechanical delay.
+    #[arg(long)]
+    pub no_compensation: bool,
+    /// Tempo factor: 2 plays twice as fast, 0.5 half as fast.
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    pub tempo: f64,
+    /// No live terminal view (it is off anyway when the output is not a terminal).
+    #[arg(long)]
+    pub no_view: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct AnalyzeArgs {
+    /// The Standard MIDI File.
+    pub file: PathBuf,
+    /// The robot's configuration (see `orch config`); the thesis's robot if not given.
+    #[arg(long, value_name = "FILE")]
+    pub robot: Option<PathBuf>,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Tempo factor: 2 plays twice as fast, 0.5 half as fast.
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    pub tempo: f64,
 }

@@ -1,21 +1,12 @@
 //! `orch`: make MIDI-driven solenoid instruments play.
 //!
-//! Thin glue: parse the arguments, build the pieces, run, and exit with 0 (success),
-//! 1 (something failed while running) or 2 (bad usage or bad input: the command line, a file,
-//! a configuration).
-
-mod cli;
-mod decode;
-mod error;
-mod hex;
-mod input;
-mod interpret;
-mod robot;
-mod show;
+//! Thin glue: parse the arguments, run, and exit with 0 (success), 1 (something failed while
+//! running) or 2 (bad usage or bad input: the command line, a file, a configuration).
 
 use std::process::ExitCode;
 
 use clap::Parser;
+use orch::{cli, error};
 
 fn main() -> ExitCode {
     let cli = match cli::Cli::try_parse() {
@@ -29,12 +20,7 @@ fn main() -> ExitCode {
             };
         }
     };
-    let result = match cli.command {
-        cli::Command::Decode(args) => decode::run(&args),
-        cli::Command::Interpret(args) => interpret::run(&args),
-        cli::Command::Config => robot::print_default(),
-    };
-    match result {
+    match orch::run(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if error::is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {

@@ -34,6 +34,8 @@ pub(crate) const SUSTAINED: u8 = 0b100;
 pub(crate) const FOLDED: u8 = 0b1000;
 /// The note of a delayed strike was released before it struck: release after `min_press`.
 pub(crate) const RELEASE_AFTER: u8 = 0b1_0000;
+/// The key struck late (after waiting for its re-strike gap): it is held at least `min_press`.
+pub(crate) const LATE: u8 = 0b10_0000;
 
 /// Physical state of `K` keys: 6 bytes a key.
 #[derive(Clone, Debug)]
@@ -105,7 +107,7 @@ impl<const K: usize> Fingers<K> {
             _ => {}
         }
         let keep = if phase == DOWN || phase == PENDING {
-            self.flags[k] & (SUSTAINED | FOLDED | RELEASE_AFTER)
+            self.flags[k] & (SUSTAINED | FOLDED | RELEASE_AFTER | LATE)
         } else {
             0
         };

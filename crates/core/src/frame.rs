@@ -52,6 +52,11 @@ impl<const B: usize> FingerFrame<B> {
         self.outputs[board] != self.written[board]
     }
 
+    /// Whether output `bit` of `board` was on in the last write to that board.
+    pub fn is_written(&self, board: u8, bit: u8) -> bool {
+        self.written[board as usize] & (1 << (bit & 15)) != 0
+    }
+
     /// Whether any board needs a write.
     pub fn any_dirty(&self) -> bool {
         self.outputs != self.written

@@ -1,9 +1,9 @@
 //! The interpreter: decoded messages and the current time in, finger frames out.
 
-use crate::config::{Config, ConfigError};
+use crate::config::{Config, ConfigError, GuardConfig};
 use crate::decoder::{Counters, Decoder};
 use crate::fingers::{
-    Fingers, AGE_CAP, DOWN, FOLDED, PENDING, READY, RELEASE_AFTER, RELEASING, SUSTAINED,
+    Fingers, AGE_CAP, DOWN, FOLDED, LATE, PENDING, READY, RELEASE_AFTER, RELEASING, SUSTAINED,
 };
 use crate::frame::{FingerFrame, FlushError};
 use crate::held::{HeldNotes, NoteTable};
@@ -16,8 +16,30 @@ use crate::values::{Channel, Note, Velocity};
 /// The specification's Active Sensing timeout: 300 ms.
 pub const ACTIVE_SENSING_TIMEOUT: Duration = Duration::from_millis(300);
 
+/// What a key is doing, as [`Interpreter::key_phase`] tells it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum KeyPhase {
+    /// Up and free to strike.
+    Up,
+    /// Released recently: a strike now would wait for the re-strike gap.
+    Resting,
+    /// A strike is waiting for the re-strike gap to pass.
+    Waiting,
+    /// Down: its solenoid is powered.
+    Down,
+}
+
 /// `due` when no per-key timer runs.
 const NEVER: Instant = Instant::from_micros(u64::MAX);
+
+/// How long a released key rests before it may strike again, in µs: the re-strike gap, but at
+/// least 1 µs. A key released at some instant never strikes again at that same instant, even
+/// with a zero gap: the release would never reach the boards (the frame would go 1, 0, 1
+/// between two flushes), the finger would stay down, and its hold limit would restart from the
+/// re-strike, so a note repeated faster than the limit could hold a solenoid on for ever.
+fn rest_us(g: &GuardConfig) -> u32 {
+    g.restrike_gap.as_micros().max(1)
+}
 
 /// Turns MIDI into finger-board outputs, safely.
 ///
@@ -33,7 +55,8 @@ const NEVER: Instant = Instant::from_micros(u64::MAX);
 ///
 /// A key goes down when a note lands on it and up only when every note holding it has been
 /// released: the same note on two channels, or two notes folded onto one key. A Note-On for a
-/// note that is already on (the same channel and note, no Note-Off between) re-strikes the key.
+/// note that is already on (the same channel and note, no Note-Off between) re-strikes the key,
+/// unless the key struck less than the guard's `min_press` ago (then it joins that strike).
 #[derive(Clone, Debug)]
 pub struct Interpreter<const B: usize = 4, const K: usize = 61, H: HeldNotes = NoteTable> {
     config: Config<B>,
@@ -132,6 +155,19 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     /// Whether `key` (0 = lowest key) is down.
     pub fn is_down(&self, key: u8) -> bool {
         (key as usize) < K && self.fingers.phase(key) == DOWN
+    }
+
+    /// What `key` (0 = lowest key) is doing.
+    pub fn key_phase(&self, key: u8) -> KeyPhase {
+        if key as usize >= K {
+            return KeyPhase::Up;
+        }
+        match self.fingers.phase(key) {
+            DOWN => KeyPhase::Down,
+            PENDING => KeyPhase::Waiting,
+            RELEASING => KeyPhase::Resting,
+            _ => KeyPhase::Up,
+        }
     }
 
     /// How many keys are down.
@@ -239,9 +275,9 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
                     if hold.is_some_and(|h| age >= h) {
                         self.stats.cut_by_hold_limit += 1;
                         self.forget_key(key);
-                        self.release_key(key, now);
+                        self.release_now(key, now);
                     } else if short && age >= g.min_press.as_micros() {
-                        self.release_key(key, now);
+                        self.release_now(key, now);
                     } else {
                         let mut limit = hold.unwrap_or(u32::MAX);
                         if short {
@@ -253,11 +289,12 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
                     }
                 }
                 PENDING => {
-                    let gap = g.restrike_gap.as_micros();
+                    let gap = rest_us(&g);
                     if age >= gap {
                         let folded = self.fingers.has(key, FOLDED);
                         self.count_sounded(folded);
                         self.press_now(key, now);
+                        self.fingers.set_flag(key, LATE, true);
                         let mut limit = g.max_hold.unwrap_or(Duration::MAX);
                         if self.fingers.has(key, RELEASE_AFTER) {
                             limit = limit.min(g.min_press);
@@ -267,7 +304,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
                         due = due.min(now + Duration::from_micros(gap - age));
                     }
                 }
-                RELEASING if age >= g.restrike_gap.as_micros() => {
+                RELEASING if age >= rest_us(&g) => {
                     self.fingers.set_phase(key, READY);
                 }
                 _ => {}
@@ -285,13 +322,17 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         if now <= self.clock {
             return;
         }
-        let jump = now.saturating_since(self.clock);
+        let before = self.clock;
+        let jump = now.saturating_since(before);
         self.clock = now;
         // Ages are clamped well before they could wrap: whenever the clock jumps by at least
-        // the cap (everything is old), and at least once every cap/2 of clock time.
+        // the cap (everything is old), and at least once every cap/2 of clock time. Ages can
+        // be up to 1.5 × cap just before a clamp, so a jump of up to a cap on top of that
+        // would wrap 32 bits: clamp at the time before the jump first.
         if jump >= AGE_CAP as u64 {
             self.fingers.clamp_ages(now, true);
-        } else if (now.as_micros() >> 30) != ((now.as_micros() - jump) >> 30) {
+        } else if (now.as_micros() >> 30) != (before.as_micros() >> 30) {
+            self.fingers.clamp_ages(before, false);
             self.fingers.clamp_ages(now, false);
         }
     }
@@ -351,7 +392,13 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         let repeated = self.notes.contains(channel, note);
         let phase = self.fingers.phase(key);
         let busy = phase == DOWN || phase == PENDING;
-        if busy && !repeated && self.held(key) {
+        // A repeat of a note whose key struck less than `min_press` ago (the same note doubled
+        // in two tracks of a score, arriving together or a few bytes apart) joins the strike:
+        // striking again before the key has even sounded would only cut it short.
+        let just_struck = phase == DOWN
+            && self.config.guard.enabled
+            && self.fingers.age(key, now) < self.config.guard.min_press.as_micros();
+        if busy && (just_struck || !repeated) && self.held(key) {
             // Another note holds the key already: this one joins it.
             if self.notes.insert(channel, note, key) {
                 self.count_sounded(folded);
@@ -380,7 +427,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             return;
         }
         if phase == DOWN {
-            self.release_key(key, now);
+            self.release_now(key, now);
         }
         self.fingers.set_velocity(key, velocity.get());
         self.strike(key, folded, now);
@@ -431,7 +478,10 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
                 continue;
             }
             let sustained = self.fingers.has(key, SUSTAINED) && pedal_holds;
-            if !self.held(key) && !sustained {
+            // A key striking for `min_press` (RELEASE_AFTER) is no channel's any more: its
+            // note is over, and it lets go by itself.
+            let short = self.fingers.has(key, RELEASE_AFTER);
+            if !self.held(key) && !sustained && !short {
                 self.release_key(key, now);
             }
         }
@@ -465,9 +515,9 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         let g = self.config.guard;
         let resting = self.fingers.phase(key) == RELEASING
             && g.enabled
-            && self.fingers.age(key, now) < g.restrike_gap.as_micros();
+            && self.fingers.age(key, now) < rest_us(&g);
         if resting {
-            let wait = g.restrike_gap.as_micros() - self.fingers.age(key, now);
+            let wait = rest_us(&g) - self.fingers.age(key, now);
             self.fingers.set_phase(key, PENDING);
             self.fingers.set_flag(key, FOLDED, folded);
             self.stats.restrikes_delayed += 1;
@@ -498,12 +548,27 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         self.stats.peak_keys_down = self.stats.peak_keys_down.max(self.fingers.down);
     }
 
+    /// Lets `key` go because its notes ended. A strike that has not reached the boards yet
+    /// (pressed and released within one flush: a zero-length note), that is still waiting for
+    /// its re-strike gap, or that struck late after waiting, is not lost: it is held for the
+    /// guard's `min_press` from its strike.
     fn release_key(&mut self, key: u8, now: Instant) {
         match self.fingers.phase(key) {
             DOWN => {
-                self.fingers.enter(key, RELEASING, now);
-                if let Some(f) = self.config.layout.finger(key) {
-                    self.frame.set(f.board, f.bit, false);
+                let g = &self.config.guard;
+                let unwritten = self
+                    .config
+                    .layout
+                    .finger(key)
+                    .is_some_and(|f| !self.frame.is_written(f.board, f.bit));
+                let unwritten = unwritten || self.fingers.has(key, LATE);
+                let age = self.fingers.age(key, now);
+                let min = g.min_press.as_micros();
+                if unwritten && g.enabled && age < min {
+                    self.fingers.set_flag(key, RELEASE_AFTER, true);
+                    self.due = self.due.min(now + Duration::from_micros(min - age));
+                } else {
+                    self.release_now(key, now);
                 }
             }
             PENDING => {
@@ -515,6 +580,16 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         }
     }
 
+    /// Releases `key` now if it is down.
+    fn release_now(&mut self, key: u8, now: Instant) {
+        if self.fingers.phase(key) == DOWN {
+            self.fingers.enter(key, RELEASING, now);
+            if let Some(f) = self.config.layout.finger(key) {
+                self.frame.set(f.board, f.bit, false);
+            }
+        }
+    }
+
     /// Releases `key` if down, and cancels a delayed strike: for resets and cuts.
     fn cancel_key(&mut self, key: u8, now: Instant) {
         if self.fingers.phase(key) == PENDING {
@@ -522,7 +597,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             self.stats.dropped_cancelled += 1;
             self.fingers.set_phase(key, RELEASING);
         } else {
-            self.release_key(key, now);
+            self.release_now(key, now);
         }
     }
 }

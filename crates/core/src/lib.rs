@@ -73,7 +73,7 @@ pub use config::{Config, ConfigError, GuardConfig, MAX_LIMIT};
 pub use decoder::{Counters, Decoded, Decoder};
 pub use frame::{FingerFrame, FlushError};
 pub use held::{HeldNotes, NotePool, NoteTable};
-pub use interpreter::{Interpreter, ACTIVE_SENSING_TIMEOUT};
+pub use interpreter::{Interpreter, KeyPhase, ACTIVE_SENSING_TIMEOUT};
 pub use keymap::{BoardSpan, Finger, KeyOf, KeyRange, Layout, OutOfRange};
 pub use message::Message;
 pub use output::{BoardId, FingerBoards};

@@ -1,0 +1,30 @@
+//! The `orch` program's pieces, so that tests can reach them; `main.rs` only parses the
+//! arguments and calls [`run`].
+//!
+//! Host I/O lives here: reading files and standard input, the robot configuration, the live
+//! terminal view, and the engine that drives the core onto the virtual robot.
+
+pub mod cli;
+pub mod decode;
+pub mod engine;
+pub mod error;
+pub mod hex;
+pub mod input;
+pub mod interpret;
+pub mod perform;
+pub mod play;
+pub mod report;
+pub mod robot;
+pub mod show;
+pub mod view;
+
+/// Runs one command.
+pub fn run(command: cli::Command) -> anyhow::Result<()> {
+    match command {
+        cli::Command::Decode(args) => decode::run(&args),
+        cli::Command::Interpret(args) => interpret::run(&args),
+        cli::Command::Play(args) => play::run_play(&args),
+        cli::Command::Analyze(args) => play::run_analyze(&args),
+        cli::Command::Config => robot::print_default(),
+    }
+}

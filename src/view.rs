@@ -1,0 +1,195 @@
+//! The live terminal view of `orch play`: the keyboard with pressed keys lit, bar and beat,
+//! tempo, and progress.
+
+use std::io;
+
+use ratatui::layout::{Constraint, Layout};
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Block, Borders, Gauge, Paragraph};
+use ratatui::{DefaultTerminal, Frame};
+
+/// What the view shows at one moment.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    pub title: String,
+    /// The note of the lowest key.
+    pub low_note: u8,
+    /// Whether each key is down (its solenoid powered).
+    pub down: Vec<bool>,
+    pub bar: u32,
+    pub beat: u32,
+    pub bpm: f64,
+    pub elapsed_s: f64,
+    pub total_s: f64,
+    pub notes_sent: u64,
+    pub notes: u64,
+}
+
+const NAMES: [&str; 12] = [
+    "C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B",
+];
+
+/// "C4" for 60.
+pub fn note_name(note: u8) -> String {
+    format!("{}{}", NAMES[note as usize % 12], note as i32 / 12 - 1)
+}
+
+fn is_black(note: u8) -> bool {
+    matches!(note % 12, 1 | 3 | 6 | 8 | 10)
+}
+
+fn clock(s: f64) -> String {
+    let s = s.max(0.0) as u64;
+    format!("{}:{:02}", s / 60, s % 60)
+}
+
+/// The terminal, taken over for the view and given back on drop.
+pub struct View {
+    terminal: DefaultTerminal,
+}
+
+impl View {
+    pub fn start() -> io::Result<Self> {
+        Ok(Self {
+            terminal: ratatui::try_init()?,
+        })
+    }
+
+    pub fn draw(&mut self, scene: &Scene) -> io::Result<()> {
+        self.terminal.draw(|f| render(f, scene))?;
+        Ok(())
+    }
+}
+
+/// Whether the person at the terminal asked to stop (q, Esc or Ctrl-C; the view's raw mode
+/// turns Ctrl-C into a key press).
+pub fn quit_requested() -> bool {
+    use ratatui::crossterm::event::{self, Event, KeyCode, KeyModifiers};
+    while event::poll(std::time::Duration::ZERO).unwrap_or(false) {
+        if let Ok(Event::Key(k)) = event::read() {
+            let ctrl_c =
+                k.code == KeyCode::Char('c') && k.modifiers.contains(KeyModifiers::CONTROL);
+            if ctrl_c || matches!(k.code, KeyCode::Char('q') | KeyCode::Esc) {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+impl Drop for View {
+    fn drop(&mut self) {
+        ratatui::restore();
+    }
+}
+
+fn render(f: &mut Frame, s: &Scene) {
+    let [head, keys, down, gauge] = Layout::vertical([
+        Constraint::Length(1),
+        Constraint::Length(5),
+        Constraint::Length(1),
+        Constraint::Length(1),
+    ])
+    .areas(f.area());
+    let head_line = Line::from(vec![
+        Span::styled("orch play ", Style::default().add_modifier(Modifier::BOLD)),
+        Span::raw(format!(
+            "{}   bar {} beat {}   {:.1} bpm   notes {}/{}",
+            s.title, s.bar, s.beat, s.bpm, s.notes_sent, s.notes
+        )),
+    ]);
+    f.render_widget(Paragraph::new(head_line), head);
+
+    // One cell a key; pressed keys lit. Octave labels above.
+    let mut labels = String::new();
+    let mut cells = Vec::new();
+    for (i, &is_down) in s.down.iter().enumerate() {
+        let note = s.low_note.saturating_add(i as u8);
+        if note % 12 == 0 {
+            let name = note_name(note);
+            while labels.chars().count() < i {
+                labels.push(' ');
+            }
+            labels.push_str(&name);
+        }
+        let style = match (is_down, is_black(note)) {
+            (true, _) => Style::default().fg(Color::Black).bg(Color::Yellow),
+            (false, true) => Style::default().fg(Color::DarkGray),
+            (false, false) => Style::default().fg(Color::White),
+        };
+        let glyph = if is_down {
+            "#"
+        } else if is_black(note) {
+            "|"
+        } else {
+            "'"
+        };
+        cells.push(Span::styled(glyph, style));
+    }
+    let board = Paragraph::new(vec![Line::raw(labels), Line::from(cells)]).block(
+        Block::default()
+            .borders(Borders::ALL)
+            .title(format!(" {} keys ", s.down.len())),
+    );
+    f.render_widget(board, keys);
+
+    let names: Vec<String> = s
+        .down
+        .iter()
+        .enumerate()
+        .filter(|(_, d)| **d)
+        .map(|(i, _)| note_name(s.low_note.saturating_add(i as u8)))
+        .collect();
+    f.render_widget(Paragraph::new(format!("down: {}", names.join(" "))), down);
+
+    let ratio = if s.total_s > 0.0 {
+        (s.elapsed_s / s.total_s).clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    let gauge_widget = Gauge::default()
+        .gauge_style(Style::default().fg(Color::Cyan))
+        .ratio(ratio)
+        .label(format!("{} / {}", clock(s.elapsed_s), clock(s.total_s)));
+    f.render_widget(gauge_widget, gauge);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ratatui::backend::TestBackend;
+    use ratatui::Terminal;
+
+    #[test]
+    fn pressed_keys_are_lit_and_named() {
+        let mut t = Terminal::new(TestBackend::new(80, 8)).unwrap();
+        let mut down = vec![false; 61];
+        down[24] = true;
+        down[28] = true;
+        let scene = Scene {
+            title: "t.mid".into(),
+            low_note: 36,
+            down,
+            bar: 3,
+            beat: 2,
+            bpm: 120.0,
+            elapsed_s: 61.0,
+            total_s: 122.0,
+            notes_sent: 5,
+            notes: 10,
+        };
+        t.draw(|f| render(f, &scene)).unwrap();
+        let text: String = t
+            .backend()
+            .buffer()
+            .content()
+            .iter()
+            .map(|c| c.symbol())
+            .collect();
+        assert!(text.contains("bar 3 beat 2"), "{text}");
+        assert!(text.contains("down: C4 E4"), "{text}");
+        assert!(text.contains("1:01 / 2:02"), "{text}");
+        assert_eq!(note_name(36), "C2");
+    }
+}
