@@ -271,3 +271,119 @@ fn config_prints_a_commented_default_that_reads_back() {
     assert!(out.status.success());
     assert_eq!(json_lines(&out.stdout)[0]["address"], 0x24);
 }
+
+fn corpus(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/midi")
+        .join(name)
+}
+
+#[test]
+fn play_and_analyze_refuse_malformed_files_with_exit_2_and_no_panic() {
+    let dir = std::env::temp_dir().join(format!("orch-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let good = std::fs::read(corpus("bach-invention-01.mid")).unwrap();
+    let mut files: Vec<std::path::PathBuf> = [
+        "bad-empty.mid",
+        "bad-header-magic.mid",
+        "bad-no-running-status.mid",
+        "bad-track-length.mid",
+        "bad-truncated-half.mid",
+    ]
+    .iter()
+    .map(|n| corpus(n))
+    .collect();
+    let made: [(&str, Vec<u8>); 4] = [
+        ("truncated-header.mid", good[..10].to_vec()),
+        ("truncated-track.mid", good[..good.len() / 3].to_vec()),
+        (
+            "random.mid",
+            (0..4000u32)
+                .map(|i| (i.wrapping_mul(2654435761) >> 13) as u8)
+                .collect(),
+        ),
+        ("header-only.mid", good[..14].to_vec()),
+    ];
+    for (name, bytes) in made {
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        files.push(p);
+    }
+    files.push(dir.join("does-not-exist.mid"));
+    for file in files {
+        for cmd in [&["play", "--fast"][..], &["analyze"][..]] {
+            let out = orch().args(cmd).arg(&file).output().unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(
+                out.status.code(),
+                Some(2),
+                "{cmd:?} {}: {err}",
+                file.display()
+            );
+            assert!(
+                err.contains("orch: error:") && !err.contains("panicked"),
+                "{err}"
+            );
+        }
+    }
+}
+
+#[test]
+fn play_fast_json_report_adds_up() {
+    let out = orch()
+        .args(["play", "--fast", "--json"])
+        .arg(corpus("joplin-maple-leaf-rag.mid"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let d = &r["dropped"];
+    let sum = ["channel", "range", "power", "cancelled"]
+        .iter()
+        .map(|k| d[k].as_u64().unwrap())
+        .sum::<u64>()
+        + r["played"].as_u64().unwrap()
+        + r["folded"].as_u64().unwrap();
+    assert_eq!(r["notes"], 2308);
+    assert_eq!(sum, 2308);
+    assert_eq!(r["folded"], 9);
+    for key in ["onset_ms", "onset_uncompensated_ms"] {
+        for f in ["median", "p99", "max"] {
+            assert!(r[key][f].is_number(), "{key}.{f}");
+        }
+    }
+    assert!(r["onset_ms"]["max"].as_f64().unwrap() < 1.0);
+    assert!(r["peak_keys_down"].as_u64().unwrap() >= 4);
+}
+
+#[test]
+fn analyze_says_what_will_go_wrong() {
+    let out = orch()
+        .arg("analyze")
+        .arg(corpus("fof-feelings.mid"))
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("notes are outside the keys and will be folded"),
+        "{text}"
+    );
+    let robot = std::env::temp_dir().join(format!("orch-drop-{}.toml", std::process::id()));
+    std::fs::write(&robot, "[keys]\nout_of_range = \"drop\"\n").unwrap();
+    let out = orch()
+        .args(["analyze", "--json", "--robot"])
+        .arg(&robot)
+        .arg(corpus("fof-feelings.mid"))
+        .output()
+        .unwrap();
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        r["dropped"]["range"], 491,
+        "the MANIFEST's out-of-range count"
+    );
+}

@@ -28,8 +28,6 @@ pub(crate) const RELEASING: u8 = 1;
 pub(crate) const PENDING: u8 = 2;
 pub(crate) const DOWN: u8 = 3;
 const PHASE: u8 = 0b11;
-/// The key is held by the sustain pedal.
-pub(crate) const SUSTAINED: u8 = 0b100;
 /// The note waiting in `PENDING` was folded.
 pub(crate) const FOLDED: u8 = 0b1000;
 /// The note of a delayed strike was released before it struck: release after `min_press`.
@@ -107,7 +105,7 @@ impl<const K: usize> Fingers<K> {
             _ => {}
         }
         let keep = if phase == DOWN || phase == PENDING {
-            self.flags[k] & (SUSTAINED | FOLDED | RELEASE_AFTER | LATE)
+            self.flags[k] & (FOLDED | RELEASE_AFTER | LATE)
         } else {
             0
         };

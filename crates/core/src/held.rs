@@ -3,8 +3,8 @@
 //! A key goes up only when every note holding it has been released, so the interpreter keeps
 //! every (channel, note) that is on. Two stores implement [`HeldNotes`]:
 //!
-//! - [`NoteTable`] (the default): a channel mask for each of the 128 notes, 256 bytes. Exact
-//!   for any number of notes held at once; the host's choice.
+//! - [`NoteTable`] (the default): two channel masks (played, sustained) for each of the 128
+//!   notes, 512 bytes. Exact for any number of notes held at once; the host's choice.
 //! - [`NotePool`]: up to `N` held notes, 3 bytes each, for small MCUs. A Note-On that finds
 //!   the pool full is refused like one past the power budget. With `N` at least twice the
 //!   guard's `max_keys_down` it is never the limit in practice, since a note is only kept
@@ -13,93 +13,137 @@
 use crate::keymap::{KeyRange, OutOfRange};
 use crate::values::{Channel, Note};
 
-/// A store of the (channel, note) pairs that are on, with the key each one holds.
+/// A store of the (channel, note) pairs that hold keys, with the key each one holds.
+///
+/// A note holds its key while it is on (played), and after its Note-Off while its channel's
+/// sustain pedal is down (sustained).
 pub trait HeldNotes: Clone + core::fmt::Debug {
     /// An empty store.
     const EMPTY: Self;
 
-    /// Whether `note` is on on `channel`.
+    /// Whether `note` is on (played, not only sustained) on `channel`.
     fn contains(&self, channel: Channel, note: Note) -> bool;
 
-    /// Records `note` on `channel`, holding `key`. Returns `false` if the store is full.
+    /// Records `note` as on on `channel`, holding `key` (a sustained note becomes played
+    /// again). Returns `false` if the store is full.
     fn insert(&mut self, channel: Channel, note: Note, key: u8) -> bool;
 
     /// Forgets `note` on `channel`. Returns whether it was on.
     fn remove(&mut self, channel: Channel, note: Note) -> bool;
 
-    /// Forgets every note of `channel`.
+    /// Marks the played `note` on `channel` as held by the pedal. Returns whether it was on.
+    fn sustain(&mut self, channel: Channel, note: Note) -> bool;
+
+    /// Forgets every note of `channel` that only the pedal holds.
+    fn release_sustained(&mut self, channel: Channel);
+
+    /// Forgets every note of `channel`, played or sustained.
     fn remove_channel(&mut self, channel: Channel);
 
     /// Forgets every note holding `key`.
     fn remove_key(&mut self, key: u8, range: KeyRange, policy: OutOfRange);
 
-    /// Whether any note holds `key`.
-    fn holds_key(&self, key: u8, range: KeyRange, policy: OutOfRange) -> bool;
+    /// Whether a note holds `key`: a played one, or with `sustained` a sustained one too.
+    fn holds_key(&self, key: u8, range: KeyRange, policy: OutOfRange, sustained: bool) -> bool;
 
     /// Forgets everything.
     fn clear(&mut self);
 }
 
-/// Every note on every channel: 128 channel masks, 256 bytes. Exact under any load.
+/// Every note on every channel: for each of the 128 notes a mask of the channels playing it
+/// and one of the channels sustaining it, 512 bytes. Exact under any load.
 #[derive(Clone, Debug)]
-pub struct NoteTable([u16; 128]);
+pub struct NoteTable {
+    played: [u16; 128],
+    sustained: [u16; 128],
+}
 
 impl HeldNotes for NoteTable {
-    const EMPTY: Self = Self([0; 128]);
+    const EMPTY: Self = Self {
+        played: [0; 128],
+        sustained: [0; 128],
+    };
 
     fn contains(&self, channel: Channel, note: Note) -> bool {
-        self.0[note.get() as usize] & channel.bit() != 0
+        self.played[note.get() as usize] & channel.bit() != 0
     }
 
     fn insert(&mut self, channel: Channel, note: Note, _key: u8) -> bool {
-        self.0[note.get() as usize] |= channel.bit();
+        self.played[note.get() as usize] |= channel.bit();
+        self.sustained[note.get() as usize] &= !channel.bit();
         true
     }
 
     fn remove(&mut self, channel: Channel, note: Note) -> bool {
-        let slot = &mut self.0[note.get() as usize];
+        let slot = &mut self.played[note.get() as usize];
         let was = *slot & channel.bit() != 0;
         *slot &= !channel.bit();
         was
     }
 
-    fn remove_channel(&mut self, channel: Channel) {
-        for slot in self.0.iter_mut() {
+    fn sustain(&mut self, channel: Channel, note: Note) -> bool {
+        let was = self.remove(channel, note);
+        if was {
+            self.sustained[note.get() as usize] |= channel.bit();
+        }
+        was
+    }
+
+    fn release_sustained(&mut self, channel: Channel) {
+        for slot in self.sustained.iter_mut() {
             *slot &= !channel.bit();
         }
     }
 
-    fn remove_key(&mut self, key: u8, range: KeyRange, policy: OutOfRange) {
-        range.notes_of(key, policy, |n| self.0[n.get() as usize] = 0);
+    fn remove_channel(&mut self, channel: Channel) {
+        for (p, s) in self.played.iter_mut().zip(self.sustained.iter_mut()) {
+            *p &= !channel.bit();
+            *s &= !channel.bit();
+        }
     }
 
-    fn holds_key(&self, key: u8, range: KeyRange, policy: OutOfRange) -> bool {
+    fn remove_key(&mut self, key: u8, range: KeyRange, policy: OutOfRange) {
+        range.notes_of(key, policy, |n| {
+            self.played[n.get() as usize] = 0;
+            self.sustained[n.get() as usize] = 0;
+        });
+    }
+
+    fn holds_key(&self, key: u8, range: KeyRange, policy: OutOfRange, sustained: bool) -> bool {
         let mut held = false;
-        range.notes_of(key, policy, |n| held |= self.0[n.get() as usize] != 0);
+        range.notes_of(key, policy, |n| {
+            let i = n.get() as usize;
+            held |= self.played[i] != 0 || (sustained && self.sustained[i] != 0);
+        });
         held
     }
 
     fn clear(&mut self) {
-        self.0 = [0; 128];
+        self.played = [0; 128];
+        self.sustained = [0; 128];
     }
 }
 
 /// Up to `N` held notes, 3 bytes each, for MCUs with little RAM.
 #[derive(Clone, Debug)]
 pub struct NotePool<const N: usize> {
-    /// `channel << 7 | note` of each held note.
+    /// `channel << 7 | note` of each held note, with [`SUSTAINED`] set if only the pedal
+    /// holds it.
     notes: [u16; N],
     /// The key each one holds.
     keys: [u8; N],
     len: u8,
 }
 
+/// The tag bit of a note that only the sustain pedal holds.
+const SUSTAINED: u16 = 1 << 15;
+
 impl<const N: usize> NotePool<N> {
     fn find(&self, channel: Channel, note: Note) -> Option<usize> {
         let tag = (channel.get() as u16) << 7 | note.get() as u16;
         self.notes[..self.len as usize]
             .iter()
-            .position(|&t| t == tag)
+            .position(|&t| t & !SUSTAINED == tag)
     }
 
     fn retain(&mut self, mut keep: impl FnMut(u16, u8) -> bool) {
@@ -125,11 +169,13 @@ impl<const N: usize> HeldNotes for NotePool<N> {
     };
 
     fn contains(&self, channel: Channel, note: Note) -> bool {
-        self.find(channel, note).is_some()
+        self.find(channel, note)
+            .is_some_and(|i| self.notes[i] & SUSTAINED == 0)
     }
 
     fn insert(&mut self, channel: Channel, note: Note, key: u8) -> bool {
-        if self.contains(channel, note) {
+        if let Some(i) = self.find(channel, note) {
+            self.notes[i] &= !SUSTAINED;
             return true;
         }
         let i = self.len as usize;
@@ -146,23 +192,41 @@ impl<const N: usize> HeldNotes for NotePool<N> {
         let Some(i) = self.find(channel, note) else {
             return false;
         };
+        let was = self.notes[i] & SUSTAINED == 0;
         let last = self.len as usize - 1;
         self.notes[i] = self.notes[last];
         self.keys[i] = self.keys[last];
         self.len -= 1;
-        true
+        was
+    }
+
+    fn sustain(&mut self, channel: Channel, note: Note) -> bool {
+        match self.find(channel, note) {
+            Some(i) if self.notes[i] & SUSTAINED == 0 => {
+                self.notes[i] |= SUSTAINED;
+                true
+            }
+            _ => false,
+        }
+    }
+
+    fn release_sustained(&mut self, channel: Channel) {
+        self.retain(|tag, _| tag & SUSTAINED == 0 || ((tag >> 7) & 0x0F) as u8 != channel.get());
     }
 
     fn remove_channel(&mut self, channel: Channel) {
-        self.retain(|tag, _| (tag >> 7) as u8 != channel.get());
+        self.retain(|tag, _| ((tag >> 7) & 0x0F) as u8 != channel.get());
     }
 
     fn remove_key(&mut self, key: u8, _range: KeyRange, _policy: OutOfRange) {
         self.retain(|_, k| k != key);
     }
 
-    fn holds_key(&self, key: u8, _range: KeyRange, _policy: OutOfRange) -> bool {
-        self.keys[..self.len as usize].contains(&key)
+    fn holds_key(&self, key: u8, _range: KeyRange, _policy: OutOfRange, sustained: bool) -> bool {
+        self.keys[..self.len as usize]
+            .iter()
+            .zip(&self.notes)
+            .any(|(&k, &t)| k == key && (sustained || t & SUSTAINED == 0))
     }
 
     fn clear(&mut self) {
@@ -189,10 +253,10 @@ mod tests {
         h.insert(ch(0), n(24), 0);
         h.insert(ch(1), n(36), 0);
         h.insert(ch(1), n(60), 24);
-        let a = h.holds_key(0, r, p);
+        let a = h.holds_key(0, r, p, false);
         h.remove_channel(ch(1));
-        let b = h.holds_key(0, r, p);
-        let c = h.holds_key(24, r, p);
+        let b = h.holds_key(0, r, p, false);
+        let c = h.holds_key(24, r, p, false);
         let d = h.remove(ch(0), n(24));
         let e = h.remove(ch(0), n(24));
         h.insert(ch(3), n(48), 12);
@@ -201,7 +265,28 @@ mod tests {
         let f = h.contains(ch(3), n(48));
         let g = h.contains(ch(4), n(36));
         h.clear();
-        [a, b, c, d, e, f, g, h.holds_key(0, r, p)]
+        [a, b, c, d, e, f, g, h.holds_key(0, r, p, true)]
+    }
+
+    /// Sustain: a released note holds its key only with `sustained`, until its channel lets go.
+    fn exercise_sustain<H: HeldNotes>() -> [bool; 7] {
+        let r = KeyRange::THESIS;
+        let p = OutOfRange::Fold;
+        let mut h = H::EMPTY;
+        h.insert(ch(0), n(60), 24);
+        h.insert(ch(1), n(62), 26);
+        let a = h.sustain(ch(0), n(60));
+        let b = h.contains(ch(0), n(60));
+        let c = h.holds_key(24, r, p, true) && !h.holds_key(24, r, p, false);
+        h.release_sustained(ch(1));
+        let d = h.holds_key(24, r, p, true);
+        h.release_sustained(ch(0));
+        let e = h.holds_key(24, r, p, true);
+        let f = h.holds_key(26, r, p, false);
+        h.sustain(ch(1), n(62));
+        h.insert(ch(1), n(62), 26);
+        let g = h.contains(ch(1), n(62));
+        [a, b, c, d, e, f, g]
     }
 
     #[test]
@@ -209,6 +294,9 @@ mod tests {
         let want = [true, true, false, true, false, false, true, false];
         assert_eq!(exercise::<NoteTable>(), want);
         assert_eq!(exercise::<NotePool<8>>(), want);
+        let want = [true, false, true, true, false, true, true];
+        assert_eq!(exercise_sustain::<NoteTable>(), want);
+        assert_eq!(exercise_sustain::<NotePool<8>>(), want);
     }
 
     #[test]

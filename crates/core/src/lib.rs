@@ -34,18 +34,18 @@
 //! ## Memory
 //!
 //! Sized for the thesis's ATmega16 (1 KB of SRAM for everything, stack included). For 4 boards
-//! and 61 keys, on a 64-bit host with its padding (tests check both figures):
+//! and 61 keys, on a 64-bit host with its padding (`tests/memory_budget.rs` checks the totals):
 //!
 //! | part | bytes |
 //! |---|---|
 //! | the 61 keys' phase, 32-bit timestamp and velocity (the guard's memory) | 366 |
-//! | held notes, [`NoteTable`] (the default: every channel of every note, exact under any load) | 256 |
-//! | held notes, [`NotePool<32>`](NotePool) (for MCUs: 32 notes at once, twice the power budget) | 97 |
+//! | held notes, [`NotePool<32>`](NotePool) (for MCUs: 32 notes played or sustained at once, twice the power budget) | 97 |
+//! | held notes, [`NoteTable`] (the default: every channel of every note, played and sustained, exact under any load) | 512 |
 //! | configuration 48, counters 48, frame 16, decoder 28, clock and pedals 32 | ≈ 170 |
-//! | **[`Interpreter`] with [`NoteTable`]** | **792** |
-//! | **`Interpreter<4, 61, NotePool<32>>`** | **640** |
+//! | **`Interpreter<4, 61, NotePool<32>>`: the ATmega16 build** | **640** |
+//! | **[`Interpreter`] with [`NoteTable`]: the host's** | **1048** |
 //!
-//! AVR has no padding, so the ATmega16 figures are a few bytes lower. The [`Decoder`] alone
+//! AVR has no padding, so the ATmega16 figure is a few bytes lower. The [`Decoder`] alone
 //! takes 28 bytes.
 //!
 //! ## Cargo features

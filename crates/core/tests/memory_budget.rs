@@ -1,25 +1,26 @@
 //! Guards the RAM budget. The thesis's interpreter ran on an ATmega16: 1 KB of SRAM for
-//! everything, stack included. The whole interpreter (decoder, held notes, per-key guard
-//! state, frame, configuration, counters) must stay within 800 bytes as measured on this
-//! 64-bit host (AVR has no padding, so it is a few bytes smaller there), leaving the rest of
-//! the 1 KB for the stack and the UART/I2C drivers. If this fails, something grew: find the
-//! bytes before raising the figure.
+//! everything, stack included. The MCU build of the interpreter (`NotePool<32>` for the held
+//! notes: decoder, held notes, per-key guard state, frame, configuration, counters) must stay
+//! within 640 bytes as measured on this 64-bit host (AVR has no padding, so it is a few bytes
+//! smaller there), leaving the rest of the 1 KB for the stack and the UART/I2C drivers. The
+//! host's default (`NoteTable`, exact under any load) is allowed 1048. If a figure fails,
+//! something grew: find the bytes before raising it, and update the crate docs' table.
 
 use orch_core::{Decoder, FingerFrame, Interpreter, NotePool};
 
 #[test]
-fn the_interpreter_fits_the_atmega16_ram_budget() {
-    let size = core::mem::size_of::<Interpreter>();
-    assert!(size <= 800, "Interpreter is {size} bytes, budget 800");
-}
-
-#[test]
-fn the_small_mcu_variant_is_smaller_still() {
+fn the_mcu_interpreter_fits_the_atmega16_ram_budget() {
     let size = core::mem::size_of::<Interpreter<4, 61, NotePool<32>>>();
     assert!(
         size <= 640,
-        "Interpreter<4, 61, NotePool<32>> is {size} bytes"
+        "Interpreter<4, 61, NotePool<32>> is {size} bytes, budget 640"
     );
+}
+
+#[test]
+fn the_host_interpreter_keeps_its_stated_size() {
+    let size = core::mem::size_of::<Interpreter>();
+    assert!(size <= 1048, "Interpreter is {size} bytes, stated 1048");
 }
 
 #[test]

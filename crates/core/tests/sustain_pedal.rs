@@ -107,12 +107,8 @@ fn the_hold_limit_still_applies_to_keys_held_by_the_pedal() {
     assert_eq!(rig.edges_of(60), vec![(ms(0), true), (ms(10_000), false)]);
 }
 
-/// Known deviation, reported to the lead: the sustain pedal is per channel in MIDI, but a key
-/// held by the pedal is only flagged "sustained" (one bit a key, to stay in the ATmega16's RAM
-/// budget), so it is let go only when every channel's pedal is up. Channel 1's key then stays
-/// down while channel 2's pedal is down. Run with `--ignored` to see it.
+/// The sustain pedal is per channel in MIDI: channel 2's pedal must not hold channel 1's key.
 #[test]
-#[ignore = "known deviation: sustained keys wait for every channel's pedal, not their own"]
 fn a_pedal_holds_only_its_own_channels_keys() {
     let mut rig = with_sustain();
     rig.feed(&[0xB0, 64, 127, 0xB1, 64, 127, 0x90, 60, 100], ms(0));
@@ -122,4 +118,19 @@ fn a_pedal_holds_only_its_own_channels_keys() {
         !rig.note_down(60),
         "channel 1's pedal is up; channel 2's pedal must not hold channel 1's key"
     );
+}
+
+/// The same key held by two channels' pedals goes up only when both pedals are up.
+#[test]
+fn a_key_sustained_by_two_channels_waits_for_both_pedals() {
+    let mut rig = with_sustain();
+    rig.feed(
+        &[0xB0, 64, 127, 0xB1, 64, 127, 0x90, 60, 100, 0x91, 60, 100],
+        ms(0),
+    );
+    rig.feed(&[0x80, 60, 0, 0x81, 60, 0], ms(100));
+    rig.feed(&[0xB0, 64, 0], ms(200));
+    assert!(rig.note_down(60), "channel 2's pedal still holds it");
+    rig.feed(&[0xB1, 64, 0], ms(300));
+    assert!(!rig.note_down(60));
 }
