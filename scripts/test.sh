@@ -10,6 +10,11 @@ rustup component list --installed 2>/dev/null | grep -q '^clippy' || rustup comp
 rustup component list --installed 2>/dev/null | grep -q '^rustfmt' || rustup component add rustfmt
 rustup target list --installed | grep -qx thumbv6m-none-eabi || rustup target add thumbv6m-none-eabi
 
+# The live view's test drives `orch play` in a real pseudo-terminal with tmux.
+if ! command -v tmux >/dev/null 2>&1; then
+    (apt-get update -qq && apt-get install -y -qq tmux) >/dev/null || sudo apt-get install -y -qq tmux
+fi
+
 step "format"
 cargo fmt --all -- --check
 

@@ -172,68 +172,60 @@ fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
         share(sounded),
         song.duration_us() as f64 / 1e6
     ));
-    if r.folded > 0 {
-        f.push(format!(
-            "{} notes are outside the keys and will be folded by octaves",
-            r.folded
-        ));
-    }
     let d = &r.dropped;
-    if d.range > 0 {
-        f.push(format!(
-            "{} notes are outside the keys and will not be played",
-            d.range
-        ));
-    }
-    if d.channel > 0 {
-        f.push(format!(
-            "{} notes are on channels the robot does not listen to",
-            d.channel
-        ));
-    }
-    if d.power > 0 {
-        f.push(format!(
-            "{} notes would pass the power budget of {} keys at once and will be refused",
-            d.power, robot.config.guard.max_keys_down
-        ));
-    }
+    let budget = robot.config.guard.max_keys_down;
+    let counted: [(u64, String); 8] = [
+        (
+            r.folded.into(),
+            "notes are outside the keys and will be folded by octaves".into(),
+        ),
+        (
+            d.range.into(),
+            "notes are outside the keys and will not be played".into(),
+        ),
+        (
+            d.channel.into(),
+            "notes are on channels the robot does not listen to".into(),
+        ),
+        (
+            d.power.into(),
+            format!(
+                "notes would pass the power budget of {budget} keys at once and will be refused"
+            ),
+        ),
+        (
+            r.restrikes_delayed.into(),
+            "repeated notes come too fast and will strike late to let the key rest".into(),
+        ),
+        (
+            r.cut_by_hold_limit.into(),
+            "keys are held past the hold limit and will be cut short".into(),
+        ),
+        (
+            r.too_short_to_sound,
+            "presses are too short for the key to sound".into(),
+        ),
+        (
+            r.smeared,
+            "presses come before the key is back up and will smear".into(),
+        ),
+    ];
+    f.extend(
+        counted
+            .iter()
+            .filter(|(n, _)| *n > 0)
+            .map(|(n, what)| format!("{n} {what}")),
+    );
     let drums = song
         .events()
         .iter()
         .filter(|e| e.bytes.note_on().is_some_and(|(ch, _, _)| ch == 9))
         .count();
-    if drums > 0
-        && robot
-            .config
-            .channels
-            .contains(orch_core::Channel::new(9).expect("channel 10"))
-    {
+    let ten = orch_core::Channel::new(9).expect("channel 10");
+    if drums > 0 && robot.config.channels.contains(ten) {
         f.push(format!(
-            "{drums} notes are drums on channel 10: a piano plays them as pitches; consider `channels` in robot.toml"
-        ));
-    }
-    if r.restrikes_delayed > 0 {
-        f.push(format!(
-            "{} repeated notes come too fast and will strike late to let the key rest",
-            r.restrikes_delayed
-        ));
-    }
-    if r.cut_by_hold_limit > 0 {
-        f.push(format!(
-            "{} keys are held past the hold limit and will be cut short",
-            r.cut_by_hold_limit
-        ));
-    }
-    if r.too_short_to_sound > 0 {
-        f.push(format!(
-            "{} presses are too short for the key to sound",
-            r.too_short_to_sound
-        ));
-    }
-    if r.smeared > 0 {
-        f.push(format!(
-            "{} presses come before the key is back up and will smear",
-            r.smeared
+            "{drums} notes are drums on channel 10: a piano plays them as pitches; \
+             consider `channels` in robot.toml"
         ));
     }
     if f.len() == 1 {
