@@ -1,0 +1,15 @@
+//! Fuzzes the `orch` program's text readers: `Robot::from_toml` (robot.toml) and
+//! `hex::parse_line` (`--hex` input) on any text never panic, an accepted configuration builds
+//! an interpreter, and accepted hex round-trips. The checks live in `../check_robot_toml.rs`,
+//! which the `orch` package's `tests/fuzz_replay.rs` also uses to replay the corpus and the
+//! regressions.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+
+#[path = "../check_robot_toml.rs"]
+mod check_robot_toml;
+
+fuzz_target!(|data: &[u8]| {
+    check_robot_toml::check(data);
+});
