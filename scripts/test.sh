@@ -30,5 +30,5 @@ RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features
 step "fuzz target builds (stable; running it needs nightly, see fuzz/README.md)"
 if [ -f fuzz/Cargo.toml ]; then cargo check --manifest-path fuzz/Cargo.toml --bins; fi
 
-step "tests (the fuzz corpus and crash regressions are replayed by orch-core's fuzz_replay test)"
+step "tests (every fuzz corpus and crash regression is replayed by the fuzz_replay tests)"
 cargo test --workspace --all-features
