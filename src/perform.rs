@@ -103,16 +103,24 @@ pub struct Outcome {
     pub end_us: u64,
 }
 
+/// How early compensation sends `key`'s press: its press delay and one bus write.
+fn press_lead_us(robot: &Robot, key: u8) -> u64 {
+    robot.mechanics.for_key(key).press_delay.as_micros() as u64 + robot.write_micros().ceil() as u64
+}
+
+/// How early compensation sends `key`'s release: its release delay and one bus write.
+fn release_lead_us(robot: &Robot, key: u8) -> u64 {
+    robot.mechanics.for_key(key).release_delay.as_micros() as u64
+        + robot.write_micros().ceil() as u64
+}
+
 /// The send schedule of `song` for `robot`.
 pub fn plan(song: &Song, robot: &Robot, options: Options) -> Schedule {
     let c = &robot.config;
-    let write_us = robot.write_micros().ceil() as u64;
-    let mechanics = robot.mechanics.clone();
-    let release_mech = robot.mechanics.clone();
     let comp = Compensation::new(
         Compensation::core_key_map(c.range, c.out_of_range, c.channels),
-        move |k| mechanics.for_key(k as u8).press_delay.as_micros() as u64 + write_us,
-        move |k| release_mech.for_key(k as u8).release_delay.as_micros() as u64 + write_us,
+        |k| press_lead_us(robot, k as u8),
+        |k| release_lead_us(robot, k as u8),
     )
     .restrike_gap_us(if c.guard.enabled {
         c.guard.restrike_gap.as_micros() as u64
@@ -141,7 +149,6 @@ pub fn perform(
     let mut notes = Vec::new();
     let mut stopped_at = None;
     let mut waiting: std::collections::HashMap<u8, usize> = std::collections::HashMap::new();
-    let write_us = robot.write_micros().ceil() as u64;
     for send in sends(&sched, start) {
         let t = send.t_us;
         if let Some(clock) = clock.as_deref_mut() {
@@ -186,9 +193,7 @@ pub fn perform(
         }
         let after = engine.interpreter().stats();
         let lead = match (options.compensation, key) {
-            (true, Some(k)) => {
-                robot.mechanics.for_key(k.key).press_delay.as_micros() as u64 + write_us
-            }
+            (true, Some(k)) => press_lead_us(robot, k.key),
             _ => 0,
         };
         let held_back = e.send_us + lead > e.score_us;
