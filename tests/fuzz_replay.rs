@@ -8,41 +8,14 @@
 #[path = "../fuzz/check_robot_toml.rs"]
 mod check_robot_toml;
 
+#[path = "../fuzz/replay.rs"]
+mod replay_support;
+
+use replay_support::{inputs, replay};
 use std::path::{Path, PathBuf};
 
 fn fuzz_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz")
-}
-
-/// The input files of `dir` (not the `.md` files nor hidden files), sorted.
-fn inputs(dir: &Path) -> Vec<PathBuf> {
-    let entries =
-        std::fs::read_dir(dir).unwrap_or_else(|e| panic!("{} must exist: {e}", dir.display()));
-    let mut files: Vec<PathBuf> = entries
-        .map(|e| e.expect("readable directory entry").path())
-        .filter(|p| p.is_file())
-        .filter(|p| {
-            let name = p.file_name().unwrap().to_string_lossy();
-            !name.starts_with('.') && !name.ends_with(".md")
-        })
-        .collect();
-    files.sort();
-    files
-}
-
-fn replay(files: &[PathBuf]) {
-    for file in files {
-        let data = std::fs::read(file).unwrap();
-        let outcome = std::panic::catch_unwind(|| check_robot_toml::check(&data));
-        if let Err(e) = outcome {
-            let why = e
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_default();
-            panic!("{} fails the fuzz checks: {why}", file.display());
-        }
-    }
 }
 
 #[test]
@@ -53,7 +26,7 @@ fn the_corpus_replays_clean() {
         "fuzz/corpus/robot_toml has {} inputs; the seeds are missing",
         files.len()
     );
-    replay(&files);
+    replay(&files, check_robot_toml::check);
 }
 
 #[test]
@@ -91,7 +64,7 @@ fn every_regression_replays_clean() {
         "{} must exist, with its README",
         dir.display()
     );
-    replay(&inputs(&dir));
+    replay(&inputs(&dir), check_robot_toml::check);
 }
 
 #[test]

@@ -7,41 +7,14 @@
 #[path = "../../../fuzz/check.rs"]
 mod check;
 
+#[path = "../../../fuzz/replay.rs"]
+mod replay_support;
+
+use replay_support::{inputs, replay};
 use std::path::{Path, PathBuf};
 
 fn fuzz_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz")
-}
-
-/// The input files of `dir` (not README.md nor hidden files), sorted.
-fn inputs(dir: &Path) -> Vec<PathBuf> {
-    let entries =
-        std::fs::read_dir(dir).unwrap_or_else(|e| panic!("{} must exist: {e}", dir.display()));
-    let mut files: Vec<PathBuf> = entries
-        .map(|e| e.expect("readable directory entry").path())
-        .filter(|p| p.is_file())
-        .filter(|p| {
-            let name = p.file_name().unwrap().to_string_lossy();
-            !name.starts_with('.') && !name.ends_with(".md")
-        })
-        .collect();
-    files.sort();
-    files
-}
-
-fn replay(files: &[PathBuf]) {
-    for file in files {
-        let data = std::fs::read(file).unwrap();
-        let outcome = std::panic::catch_unwind(|| check::check(&data));
-        if let Err(e) = outcome {
-            let why = e
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_default();
-            panic!("{} fails the fuzz checks: {why}", file.display());
-        }
-    }
 }
 
 #[test]
@@ -52,7 +25,7 @@ fn the_corpus_replays_clean() {
         "fuzz/corpus/interpret has {} inputs; the seeds are missing",
         files.len()
     );
-    replay(&files);
+    replay(&files, check::check);
 }
 
 #[test]
@@ -63,7 +36,7 @@ fn every_regression_replays_clean() {
         "{} must exist, with its README",
         dir.display()
     );
-    replay(&inputs(&dir));
+    replay(&inputs(&dir), check::check);
 }
 
 #[test]
