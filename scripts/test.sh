@@ -32,3 +32,8 @@ if [ -f fuzz/Cargo.toml ]; then cargo check --manifest-path fuzz/Cargo.toml --bi
 
 step "tests (every fuzz corpus and crash regression is replayed by the fuzz_replay tests)"
 cargo test --workspace --all-features
+
+step "firmware: the thesis's ATmega16 board, built and tested in simavr (firmware/test.sh)"
+(cd firmware/atmega16 && cargo fmt -- --check)
+(cd firmware/atmega16-hil && cargo fmt -- --check && cargo clippy --all-targets -- -D warnings)
+bash firmware/test.sh

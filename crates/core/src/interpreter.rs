@@ -85,6 +85,15 @@ impl Interpreter<4, 61> {
     }
 }
 
+impl<H: HeldNotes> Interpreter<4, 61, H> {
+    /// [`thesis`](Interpreter::thesis) with another store of held notes, as a `const fn`: an
+    /// MCU keeps it in a `static`, built at compile time (built at run time it would pass
+    /// through the stack, twice its size in a 1 KB SRAM).
+    pub const fn thesis_with() -> Self {
+        Self::unchecked(Config::THESIS)
+    }
+}
+
 impl Default for Interpreter<4, 61> {
     fn default() -> Self {
         Self::thesis()
@@ -600,6 +609,19 @@ mod tests {
     use super::*;
     use crate::config::GuardConfig;
     use crate::held::NotePool;
+
+    #[test]
+    fn thesis_with_a_note_pool_plays_like_the_checked_constructor() {
+        const BUILT: Interpreter<4, 61, NotePool<32>> = Interpreter::thesis_with();
+        let mut a = BUILT;
+        let mut b = Interpreter::<4, 61, NotePool<32>>::new(Config::THESIS).unwrap();
+        for i in [&mut a, &mut b] {
+            i.feed_slice(&[0x90, 60, 1, 0x91, 24, 1], Instant::ZERO);
+        }
+        assert_eq!(a.frame(), b.frame());
+        assert_eq!(a.frame().outputs(1), 1 << 8);
+        assert_eq!(a.frame().outputs(0), 1);
+    }
 
     #[test]
     fn a_full_note_pool_refuses_the_note_and_counts_it() {

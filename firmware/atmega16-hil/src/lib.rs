@@ -1,0 +1,513 @@
+//! Hardware in the loop for the ATmega16 firmware: the ELF on a simulated ATmega16 at 8 MHz
+//! (simavr through avr-tester), four simulated PCA9555 boards on its TWI, MIDI bytes fed at
+//! wire pacing, and orch-core run on the host for the expected board outputs.
+
+use std::cell::{Cell, RefCell};
+use std::path::PathBuf;
+use std::rc::Rc;
+
+use avr_tester::{AvrTester, Reader, TwiPacket, TwiSlave};
+use orch_core::{Config, Instant, Interpreter, NotePool, Recording};
+
+/// The clock of the simulated ATmega16.
+pub const F_CPU: u64 = 8_000_000;
+/// The boards' 7-bit addresses.
+pub const ADDRESSES: [u8; 4] = [0x21, 0x22, 0x23, 0x24];
+/// One MIDI byte on the wire: 10 bits at 31250 baud.
+pub const BYTE_US: u64 = 320;
+/// One byte as simavr's UART paces it: 11 bit times (start, 8 data, a parity bit it always
+/// counts, stop) at UBRR 15: 2816 cycles.
+pub const SIM_BYTE_US: u64 = 352;
+
+/// The firmware's ELF: `$ORCH_ATMEGA16_ELF`, or where `cargo build --release` in
+/// `firmware/atmega16` puts it.
+pub fn elf_path() -> PathBuf {
+    if let Ok(p) = std::env::var("ORCH_ATMEGA16_ELF") {
+        return PathBuf::from(p);
+    }
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../atmega16/target/avr-none/release/orch-atmega16.elf")
+}
+
+/// One finished write transaction seen by a board.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Transaction {
+    /// Board index (0..4).
+    pub board: usize,
+    /// The bytes after the address byte.
+    pub bytes: Vec<u8>,
+    /// CPU cycle of the STOP condition.
+    pub stop_cycle: u64,
+}
+
+/// A PCA9555 register model: input 0/1, output 0/1, polarity 0/1, configuration 0/1.
+#[derive(Clone, Debug)]
+pub struct Pca9555 {
+    /// Registers 0..=7.
+    pub regs: [u8; 8],
+    pointer: u8,
+    /// In a transaction addressed to this board, and whether the command byte came.
+    active: bool,
+    command_seen: bool,
+    reading: bool,
+    bytes: Vec<u8>,
+    /// When set, the board acknowledges nothing (unpowered, missing, or a dead bus).
+    pub nack: bool,
+}
+
+impl Default for Pca9555 {
+    fn default() -> Self {
+        // Power-up: outputs 1, every pin an input (configuration 1).
+        Self {
+            regs: [0, 0, 0xFF, 0xFF, 0, 0, 0xFF, 0xFF],
+            pointer: 0,
+            active: false,
+            command_seen: false,
+            reading: false,
+            bytes: Vec::new(),
+            nack: false,
+        }
+    }
+}
+
+impl Pca9555 {
+    /// The 16 output register bits (bit n = output n).
+    pub fn outputs(&self) -> u16 {
+        u16::from_le_bytes([self.regs[2], self.regs[3]])
+    }
+
+    /// The 16 configuration bits (1 = input).
+    pub fn config(&self) -> u16 {
+        u16::from_le_bytes([self.regs[6], self.regs[7]])
+    }
+
+    /// Pins driven high: outputs (configuration 0) whose output bit is 1.
+    pub fn driven_high(&self) -> u16 {
+        self.outputs() & !self.config()
+    }
+
+    /// Power-cycles the board.
+    pub fn power_cycle(&mut self) {
+        let nack = self.nack;
+        *self = Self::default();
+        self.nack = nack;
+    }
+
+    fn advance(&mut self) {
+        // The pointer toggles within its register pair.
+        self.pointer ^= 1;
+    }
+}
+
+/// Everything on the simulated bus.
+#[derive(Debug, Default)]
+pub struct Bus {
+    /// The four boards at 0x21..=0x24.
+    pub boards: [Pca9555; 4],
+    /// Finished write transactions, in order.
+    pub log: Vec<Transaction>,
+    /// Address phases not acknowledged (a board with `nack`).
+    pub nacked: u32,
+    /// A pin was driven high at some point (any board), with the cycle it first happened.
+    pub first_driven_high: Option<u64>,
+}
+
+impl Bus {
+    /// Every board's outputs.
+    pub fn outputs(&self) -> [u16; 4] {
+        std::array::from_fn(|i| self.boards[i].outputs())
+    }
+
+    /// The output-register writes (`[0x02, lo, hi]`) to each board, in order, from log entry
+    /// `from` on.
+    pub fn output_writes(&self, from: usize) -> [Vec<u16>; 4] {
+        let mut out: [Vec<u16>; 4] = Default::default();
+        for t in &self.log[from..] {
+            if t.bytes.len() == 3 && t.bytes[0] == 0x02 {
+                out[t.board].push(u16::from_le_bytes([t.bytes[1], t.bytes[2]]));
+            }
+        }
+        out
+    }
+}
+
+struct Slave {
+    bus: Rc<RefCell<Bus>>,
+    cycles: Rc<Cell<u64>>,
+}
+
+impl TwiSlave for Slave {
+    fn recv(&mut self, p: TwiPacket) -> Option<TwiPacket> {
+        let mut bus = self.bus.borrow_mut();
+        let seven = p.addr >> 1;
+        let i = ADDRESSES.iter().position(|&a| a == seven)?;
+        let now = self.cycles.get();
+        if p.is_stop() {
+            let b = &mut bus.boards[i];
+            let was = b.active;
+            b.active = false;
+            if was && !b.reading {
+                let bytes = std::mem::take(&mut b.bytes);
+                bus.log.push(Transaction {
+                    board: i,
+                    bytes,
+                    stop_cycle: now,
+                });
+            }
+            return Some(p.respond_ack());
+        }
+        if bus.boards[i].nack {
+            if p.is_start() {
+                bus.nacked += 1;
+            }
+            return None;
+        }
+        if p.is_start() {
+            // The address phase (simavr reports it as START with the address).
+            let b = &mut bus.boards[i];
+            if b.active && !b.reading && !b.bytes.is_empty() {
+                // A repeated START ends a write part.
+                let bytes = std::mem::take(&mut b.bytes);
+                bus.log.push(Transaction {
+                    board: i,
+                    bytes,
+                    stop_cycle: now,
+                });
+            }
+            let b = &mut bus.boards[i];
+            b.active = true;
+            b.reading = p.addr & 1 == 1;
+            if !b.reading {
+                b.command_seen = false;
+            }
+            return Some(p.respond_ack());
+        }
+        if p.is_write() {
+            let b = &mut bus.boards[i];
+            b.bytes.push(p.data);
+            if !b.command_seen {
+                b.command_seen = true;
+                b.pointer = p.data & 7;
+            } else {
+                let r = b.pointer as usize;
+                if r >= 2 {
+                    b.regs[r] = p.data;
+                }
+                b.advance();
+            }
+            if bus.first_driven_high.is_none() && bus.boards.iter().any(|b| b.driven_high() != 0) {
+                bus.first_driven_high = Some(now);
+            }
+            return Some(p.respond_ack());
+        }
+        if p.is_read() {
+            let b = &mut bus.boards[i];
+            let v = b.regs[b.pointer as usize];
+            b.advance();
+            return Some(p.respond_data(v));
+        }
+        None
+    }
+}
+
+/// The simulated robot: the firmware, its four boards and its MIDI ports.
+pub struct Hil {
+    /// The simulator.
+    pub avr: AvrTester,
+    /// CPU cycles run so far.
+    pub cycles: Rc<Cell<u64>>,
+    /// The boards.
+    pub bus: Rc<RefCell<Bus>>,
+    /// Bytes sent to the MIDI in, with the cycle each was handed to the UART.
+    pub sent: Vec<(u64, u8)>,
+    /// Bytes that came out of MIDI thru.
+    pub thru: Vec<u8>,
+}
+
+impl Default for Hil {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Hil {
+    /// Loads the firmware and attaches the boards. Does not run anything yet.
+    pub fn new() -> Self {
+        let elf = elf_path();
+        assert!(
+            elf.exists(),
+            "no firmware at {} (build it: cd firmware/atmega16 && cargo build --release)",
+            elf.display()
+        );
+        let mut avr = AvrTester::atmega16().with_clock(F_CPU as u32).load(&elf);
+        let cycles = Rc::new(Cell::new(0));
+        let bus = Rc::new(RefCell::new(Bus::default()));
+        avr.twi0().attach_slave(Slave {
+            bus: bus.clone(),
+            cycles: cycles.clone(),
+        });
+        Self {
+            avr,
+            cycles,
+            bus,
+            sent: Vec::new(),
+            thru: Vec::new(),
+        }
+    }
+
+    /// Runs one instruction; returns its cycles.
+    pub fn step(&mut self) -> u64 {
+        let n = self.avr.run().as_cycles();
+        self.cycles.set(self.cycles.get() + n);
+        n
+    }
+
+    /// The simulated time in µs.
+    pub fn now_us(&self) -> u64 {
+        self.cycles.get() / (F_CPU / 1_000_000)
+    }
+
+    /// Runs until the simulated clock reaches `cycle`.
+    pub fn run_until(&mut self, cycle: u64) {
+        while self.cycles.get() < cycle {
+            self.step();
+        }
+        self.drain_thru();
+    }
+
+    /// Runs for `us` microseconds.
+    pub fn run_us(&mut self, us: u64) {
+        let end = self.cycles.get() + us * (F_CPU / 1_000_000);
+        self.run_until(end);
+    }
+
+    /// Collects what came out of MIDI thru.
+    pub fn drain_thru(&mut self) {
+        while let Some(b) = self.avr.uart0().try_read_byte() {
+            self.thru.push(b);
+        }
+    }
+
+    /// Hands one byte to MIDI in.
+    pub fn put(&mut self, byte: u8) {
+        self.avr.uart0().write(byte);
+        self.sent.push((self.cycles.get(), byte));
+    }
+
+    /// Sends bytes back to back at wire pacing (one every 320 µs).
+    pub fn send(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.put(b);
+            self.run_us(BYTE_US);
+        }
+    }
+
+    /// When simavr's UART hands each byte sent so far to the firmware (its receive-complete
+    /// flag, the end of the stop bit), in µs: simavr paces received bytes at
+    /// [`SIM_BYTE_US`] (it counts a parity bit that 8N1 does not have).
+    pub fn arrivals_us(&self) -> Vec<u64> {
+        let mut out = Vec::with_capacity(self.sent.len());
+        let mut last = 0u64;
+        for &(cycle, _) in &self.sent {
+            let put = cycle / (F_CPU / 1_000_000);
+            let t = put.max(last) + SIM_BYTE_US;
+            out.push(t);
+            last = t;
+        }
+        out
+    }
+
+    /// The bytes sent so far.
+    pub fn sent_bytes(&self) -> Vec<u8> {
+        self.sent.iter().map(|&(_, b)| b).collect()
+    }
+
+    /// Boots the firmware: runs `us` microseconds with no input.
+    pub fn boot(&mut self) {
+        self.run_us(20_000);
+    }
+
+    /// Every board's outputs.
+    pub fn outputs(&self) -> [u16; 4] {
+        self.bus.borrow().outputs()
+    }
+
+    /// Digital pin level.
+    pub fn pin(&mut self, port: char, pin: u8) -> bool {
+        let mut pins = self.avr.pins();
+        let mut p = match (port, pin) {
+            ('A', 0) => pins.pa0(),
+            ('A', 1) => pins.pa1(),
+            ('A', 2) => pins.pa2(),
+            ('A', 3) => pins.pa3(),
+            ('A', 4) => pins.pa4(),
+            ('A', 5) => pins.pa5(),
+            ('A', 6) => pins.pa6(),
+            ('A', 7) => pins.pa7(),
+            ('D', 2) => pins.pd2(),
+            ('D', 4) => pins.pd4(),
+            ('D', 5) => pins.pd5(),
+            ('B', n) => match n {
+                0 => pins.pb0(),
+                1 => pins.pb1(),
+                2 => pins.pb2(),
+                3 => pins.pb3(),
+                4 => pins.pb4(),
+                5 => pins.pb5(),
+                6 => pins.pb6(),
+                _ => pins.pb7(),
+            },
+            _ => panic!("no probe pin P{port}{pin}"),
+        };
+        p.is_high()
+    }
+
+    /// The deepest stack the firmware has seen, in bytes (2-byte resolution), from its
+    /// diagnostic port (PORTA).
+    pub fn stack_high_water(&mut self) -> u16 {
+        let mut v = 0u16;
+        for bit in 0..8 {
+            if self.pin('A', bit) {
+                v |= 1 << bit;
+            }
+        }
+        v * 2
+    }
+}
+
+/// orch-core on the host, with the firmware's configuration, fed the same bytes at the same
+/// times: the board writes it makes, in order, and its final outputs.
+pub struct HostRobot {
+    /// The interpreter, as built into the firmware.
+    pub robot: Interpreter<4, 61, NotePool<32>>,
+    /// What it wrote.
+    pub boards: Recording<4096>,
+}
+
+impl Default for HostRobot {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl HostRobot {
+    /// The firmware's configuration (`Config::THESIS`, `NotePool<32>`).
+    pub fn new() -> Self {
+        Self {
+            robot: Interpreter::new(Config::THESIS).unwrap(),
+            boards: Recording::new(),
+        }
+    }
+
+    /// Feeds one byte at `us` and flushes, as the firmware does for each byte it takes.
+    pub fn feed(&mut self, byte: u8, us: u64) {
+        self.advance_to(us);
+        self.robot.feed(byte, Instant::from_micros(us));
+        self.robot.flush(&mut self.boards).unwrap();
+    }
+
+    /// Runs the guard's timers at every deadline up to `us`, as the firmware's loop does.
+    pub fn advance_to(&mut self, us: u64) {
+        while let Some(d) = self.robot.next_deadline() {
+            if d.as_micros() > us {
+                break;
+            }
+            self.tick(d.as_micros());
+        }
+    }
+
+    /// Runs the guard's timers up to `us`.
+    pub fn tick(&mut self, us: u64) {
+        self.robot.tick(Instant::from_micros(us));
+        self.robot.flush(&mut self.boards).unwrap();
+    }
+
+    /// The final outputs.
+    pub fn outputs(&self) -> [u16; 4] {
+        std::array::from_fn(|i| self.robot.frame().outputs(i))
+    }
+
+    /// The writes to each board, in order.
+    pub fn writes(&self) -> [Vec<u16>; 4] {
+        let mut out: [Vec<u16>; 4] = Default::default();
+        for w in self.boards.writes() {
+            out[w.board.index as usize].push(w.outputs);
+        }
+        out
+    }
+}
+
+/// A Standard MIDI File as timed wire bytes: (µs from the start, byte), channel messages
+/// only (with their status byte each), in time order, respecting the tempo map.
+pub fn smf_to_wire(data: &[u8]) -> Vec<(u64, u8)> {
+    use midly::{live::LiveEvent, MetaMessage, Smf, Timing, TrackEventKind};
+    let smf = Smf::parse(data).expect("a valid MIDI file");
+    let ppq = match smf.header.timing {
+        Timing::Metrical(t) => t.as_int() as u64,
+        Timing::Timecode(..) => panic!("timecode files are not used here"),
+    };
+    // (tick, track, index, event)
+    let mut events = Vec::new();
+    for (ti, track) in smf.tracks.iter().enumerate() {
+        let mut tick = 0u64;
+        for (ei, ev) in track.iter().enumerate() {
+            tick += ev.delta.as_int() as u64;
+            events.push((tick, ti, ei, ev.kind));
+        }
+    }
+    events.sort_by_key(|e| (e.0, e.1, e.2));
+    let mut tempo = 500_000u64; // µs per quarter
+    let mut last_tick = 0u64;
+    let mut us = 0u64;
+    let mut out = Vec::new();
+    for (tick, _, _, kind) in events {
+        us += (tick - last_tick) * tempo / ppq;
+        last_tick = tick;
+        match kind {
+            TrackEventKind::Meta(MetaMessage::Tempo(t)) => tempo = t.as_int() as u64,
+            TrackEventKind::Midi { channel, message } => {
+                let mut buf = Vec::new();
+                LiveEvent::Midi { channel, message }
+                    .write_std(&mut buf)
+                    .unwrap();
+                out.extend(buf.into_iter().map(|b| (us, b)));
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Whether every board's writes are the host's, in order, with some of the host's
+/// intermediate states possibly never written (the firmware takes every byte that is waiting
+/// before it writes, so two messages that arrive while it is writing become one write), and
+/// the same last value. Returns how many host writes were coalesced away.
+pub fn same_writes_coalesced(
+    firmware: &[Vec<u16>; 4],
+    host: &[Vec<u16>; 4],
+) -> Result<usize, String> {
+    let mut skipped = 0;
+    for b in 0..4 {
+        let (f, h) = (&firmware[b], &host[b]);
+        let mut j = 0;
+        for (i, &v) in f.iter().enumerate() {
+            while j < h.len() && h[j] != v {
+                j += 1;
+                skipped += 1;
+            }
+            if j == h.len() {
+                return Err(format!("board {b}: firmware write #{i} = {v:#06x} is not a state the host went through next (firmware {f:x?}, host {h:x?})"));
+            }
+            j += 1;
+        }
+        skipped += h.len() - j;
+        if f.last() != h.last() {
+            return Err(format!(
+                "board {b}: last write {:x?} vs host {:x?}",
+                f.last(),
+                h.last()
+            ));
+        }
+    }
+    Ok(skipped)
+}

@@ -1,0 +1,454 @@
+//! The ATmega16 firmware on a simulated ATmega16 at 8 MHz with four PCA9555 boards.
+//!
+//! Every stream is compared with orch-core run on the host with the firmware's configuration,
+//! fed the same bytes at the times simavr hands them to the firmware: the boards must see the
+//! same writes, in the same order, and end with the same outputs. A hang in the firmware shows
+//! as a test that never ends (the test command runs them under a timeout).
+
+use orch_atmega16_hil::*;
+
+/// Plays `stream` at wire pacing into a booted robot and into orch-core on the host.
+fn play(stream: &[u8]) -> (Hil, HostRobot, usize) {
+    let mut hil = Hil::new();
+    hil.boot();
+    let from = hil.bus.borrow().log.len();
+    hil.send(stream);
+    hil.run_us(20_000);
+    let mut host = HostRobot::new();
+    for (&t, &b) in hil.arrivals_us().iter().zip(stream) {
+        host.feed(b, t);
+    }
+    host.tick(hil.now_us());
+    (hil, host, from)
+}
+
+fn check_against_host(stream: &[u8]) -> (Hil, HostRobot) {
+    let (hil, host, from) = play(stream);
+    assert_eq!(hil.thru, stream, "MIDI thru must equal the input");
+    let writes = hil.bus.borrow().output_writes(from);
+    // Running-status messages (640 µs on the wire, 704 in simavr) arrive faster than the
+    // firmware interprets one (~330 µs) and writes its board (~400 µs): it then takes both
+    // waiting messages before it writes, and one intermediate state is never written.
+    match same_writes_coalesced(&writes, &host.writes()) {
+        Ok(skipped) => println!(
+            "{} host writes, {} coalesced",
+            host.writes().iter().map(Vec::len).sum::<usize>(),
+            skipped
+        ),
+        Err(e) => panic!("{e}"),
+    }
+    assert_eq!(hil.outputs(), host.outputs(), "final board outputs");
+    (hil, host)
+}
+
+#[test]
+fn thesis_table_3_three_note_ons() {
+    let (hil, _) = check_against_host(&[0x90, 0x3C, 0x7F, 0x90, 0x40, 0x7F, 0x90, 0x43, 0x7F]);
+    // C, E, G: keys 24, 28, 31 on board 1.
+    assert_eq!(hil.outputs(), [0, (1 << 8) | (1 << 12) | (1 << 15), 0, 0]);
+}
+
+#[test]
+fn thesis_table_4_running_status_and_note_off() {
+    let (hil, _) =
+        check_against_host(&[0x90, 0x3C, 0x7F, 0x40, 0x7F, 0x43, 0x7F, 0x80, 0x40, 0x00]);
+    assert_eq!(hil.outputs(), [0, (1 << 8) | (1 << 15), 0, 0]);
+}
+
+#[test]
+fn running_status_with_velocity_zero_note_offs() {
+    let mut s = vec![0x90];
+    for n in [48u8, 52, 55, 60, 64, 67] {
+        s.extend([n, 90]);
+    }
+    for n in [48u8, 55, 64] {
+        s.extend([n, 0]);
+    }
+    let (hil, _) = check_against_host(&s);
+    assert_ne!(hil.outputs(), [0; 4]);
+}
+
+#[test]
+fn real_time_bytes_inside_messages() {
+    let s = [
+        0x90, 0xF8, 0x3C, 0xFE, 0x7F, // clock and active sensing inside a Note-On
+        0xF8, 0x40, 0xFA, 0x7F, // running status with Start inside
+        0x80, 0x3C, 0xF8, 0x00,
+    ];
+    let (hil, _) = check_against_host(&s);
+    assert_eq!(hil.outputs(), [0, 1 << 12, 0, 0]);
+}
+
+#[test]
+fn all_16_channels() {
+    let mut s = Vec::new();
+    for ch in 0..16u8 {
+        s.extend([0x90 | ch, 40 + ch * 3, 100]);
+    }
+    for ch in (0..16u8).step_by(2) {
+        s.extend([0x80 | ch, 40 + ch * 3, 0]);
+    }
+    let (hil, _) = check_against_host(&s);
+    assert_ne!(hil.outputs(), [0; 4]);
+}
+
+#[test]
+fn notes_0_to_127_fold_into_the_keyboard() {
+    let mut s = Vec::new();
+    for n in 0..=127u8 {
+        s.extend([0x90, n, 64]);
+    }
+    for n in 0..=127u8 {
+        s.extend([0x80, n, 0]);
+    }
+    let (hil, _) = check_against_host(&s);
+    assert_eq!(hil.outputs(), [0; 4]);
+}
+
+#[test]
+fn power_up_drives_no_pin_before_the_first_note() {
+    let mut hil = Hil::new();
+    hil.run_us(100_000);
+    {
+        let bus = hil.bus.borrow();
+        assert_eq!(
+            bus.first_driven_high, None,
+            "a pin was driven high at power-up"
+        );
+        for (i, b) in bus.boards.iter().enumerate() {
+            assert_eq!(b.outputs(), 0, "board {i} outputs");
+            assert_eq!(b.config(), 0, "board {i} pins are outputs (driven low)");
+        }
+        // Each board: outputs to 0 FIRST, THEN the configuration.
+        for i in 0..4 {
+            let seq: Vec<&[u8]> = bus
+                .log
+                .iter()
+                .filter(|t| t.board == i)
+                .map(|t| &t.bytes[..])
+                .collect();
+            assert_eq!(
+                seq,
+                [&[2u8, 0, 0][..], &[6, 0, 0][..]],
+                "board {i} init order"
+            );
+        }
+    }
+    for pin in 0..8 {
+        assert!(
+            !hil.pin('B', pin),
+            "PB{pin} (the thesis's MOSFET port) must stay low"
+        );
+    }
+    let before = hil.cycles.get();
+    hil.send(&[0x90, 60, 100]);
+    hil.run_us(5_000);
+    let first = hil
+        .bus
+        .borrow()
+        .first_driven_high
+        .expect("the note drives a pin");
+    assert!(first > before);
+}
+
+#[test]
+fn a_nacking_board_is_retried_and_released_when_it_answers_again() {
+    let mut hil = Hil::new();
+    hil.boot();
+    hil.send(&[0x90, 60, 100, 0x90, 36, 100]); // board 1 bit 8, board 0 bit 0
+    hil.run_us(5_000);
+    assert_eq!(hil.outputs(), [1, 1 << 8, 0, 0]);
+
+    hil.bus.borrow_mut().boards[1].nack = true;
+    hil.send(&[0x80, 60, 0, 0x80, 36, 0]);
+    hil.run_us(100_000);
+    // Board 0 was written despite board 1; board 1 keeps its stale value for now.
+    assert_eq!(hil.outputs(), [0, 1 << 8, 0, 0]);
+    let nacked = hil.bus.borrow().nacked;
+    assert!(
+        nacked >= 3,
+        "the firmware retried ({nacked} NACKed address phases)"
+    );
+    // Still alive: thru works and the other boards play.
+    hil.thru.clear();
+    hil.send(&[0x90, 84, 1]);
+    hil.run_us(5_000);
+    assert_eq!(hil.thru, [0x90, 84, 1]);
+    assert_eq!(hil.outputs()[3], 1);
+    let more = hil.bus.borrow().nacked;
+    assert!(more > nacked, "it keeps retrying");
+
+    // The board comes back (after losing power: pins are inputs again, outputs 1).
+    {
+        let mut bus = hil.bus.borrow_mut();
+        bus.boards[1].power_cycle();
+        bus.boards[1].nack = false;
+    }
+    hil.run_us(30_000);
+    let bus = hil.bus.borrow();
+    assert_eq!(
+        bus.boards[1].outputs(),
+        0,
+        "key released once the board answers"
+    );
+    assert_eq!(bus.boards[1].config(), 0, "board re-initialised");
+    assert_eq!(bus.outputs(), [0, 0, 0, 1]);
+}
+
+#[test]
+fn a_dead_bus_does_not_hang_the_firmware_and_it_catches_up() {
+    let mut hil = Hil::new();
+    hil.boot();
+    hil.send(&[0x90, 60, 100, 0x90, 72, 100]);
+    hil.run_us(5_000);
+    assert_eq!(hil.outputs(), [0, 1 << 8, 1 << 4, 0]);
+    // No board answers at all (the closest simavr's TWI comes to a bus held low).
+    for b in hil.bus.borrow_mut().boards.iter_mut() {
+        b.nack = true;
+    }
+    hil.thru.clear();
+    let during = [
+        0x80, 60, 0, 0x80, 72, 0, 0x90, 40, 100, 0x80, 40, 0, 0x90, 96, 100,
+    ];
+    hil.send(&during);
+    hil.run_us(2_000_000); // longer than the watchdog's 0.5 s: no reset loop either
+    assert_eq!(hil.thru, during, "thru keeps working with the bus down");
+    for b in hil.bus.borrow_mut().boards.iter_mut() {
+        b.nack = false;
+    }
+    hil.run_us(30_000);
+    // Keys 60 and 72 released; 96 (board 3, bit 12) down as the frame says now.
+    assert_eq!(hil.outputs(), [0, 0, 0, 1 << 12]);
+    // The power-up init ran once (no watchdog reset): exactly one [6,0,0] per board before the
+    // outage.
+    let bus = hil.bus.borrow();
+    let inits_at_boot = bus.log.iter().take(8).filter(|t| t.bytes[0] == 6).count();
+    assert_eq!(inits_at_boot, 4);
+}
+
+fn stream_file(name: &str) -> (Hil, Vec<u8>, usize) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/midi")
+        .join(name);
+    let path = if path.exists() {
+        path
+    } else {
+        std::path::PathBuf::from("/work/shared/midi").join(name)
+    };
+    let data = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let timed = smf_to_wire(&data);
+    let mut hil = Hil::new();
+    hil.boot();
+    let from = hil.bus.borrow().log.len();
+    let start = hil.now_us();
+    let mut next = start;
+    for &(t, b) in &timed {
+        // Wire speed: at its time, or right after the byte before it.
+        let at = (start + t).max(next);
+        hil.run_until(at * (F_CPU / 1_000_000));
+        hil.put(b);
+        next = at + BYTE_US;
+    }
+    let bytes: Vec<u8> = timed.iter().map(|&(_, b)| b).collect();
+    (hil, bytes, from)
+}
+
+#[test]
+fn a_whole_midi_file_at_wire_speed() {
+    let t0 = std::time::Instant::now();
+    let (mut hil, bytes, from) = stream_file("m21-test06.mid");
+    hil.run_us(5_000_000); // past the guard's 4 s watchdog
+    assert_eq!(hil.thru, bytes, "thru equals input");
+    assert_eq!(hil.outputs(), [0; 4], "boards end all-off");
+
+    // No key held past the guard's 10 s limit.
+    let bus = hil.bus.borrow();
+    let mut down_since: [[Option<u64>; 16]; 4] = [[None; 16]; 4];
+    let mut longest = 0u64;
+    let mut writes = 0;
+    for t in &bus.log[from..] {
+        if t.bytes.len() != 3 || t.bytes[0] != 2 {
+            continue;
+        }
+        writes += 1;
+        let v = u16::from_le_bytes([t.bytes[1], t.bytes[2]]);
+        for (bit, slot) in down_since[t.board].iter_mut().enumerate() {
+            let on = v & (1 << bit) != 0;
+            match (on, *slot) {
+                (true, None) => *slot = Some(t.stop_cycle),
+                (false, Some(s)) => {
+                    longest = longest.max(t.stop_cycle - s);
+                    *slot = None;
+                }
+                _ => {}
+            }
+        }
+    }
+    let longest_ms = longest / (F_CPU / 1000);
+    assert!(longest_ms <= 10_010, "a key was held {longest_ms} ms");
+
+    // And the same writes as orch-core on the host.
+    let mut host = HostRobot::new();
+    for (&t, &b) in hil.arrivals_us().iter().zip(&bytes) {
+        host.feed(b, t);
+    }
+    host.tick(hil.now_us());
+    assert_eq!(bus.output_writes(from), host.writes());
+    println!(
+        "m21-test06.mid: {} bytes, {} board writes, longest key {} ms, simulated {:.1} s in {:.1?}",
+        bytes.len(),
+        writes,
+        longest_ms,
+        hil.now_us() as f64 / 1e6,
+        t0.elapsed()
+    );
+}
+
+/// Figures for the README: run with `--nocapture`.
+#[test]
+fn figures() {
+    // Flash and RAM from avr-size.
+    let elf = elf_path();
+    let size = std::process::Command::new("avr-size")
+        .arg("-A")
+        .arg(&elf)
+        .output()
+        .expect("avr-size (Debian's binutils-avr)");
+    let text = String::from_utf8_lossy(&size.stdout);
+    let section = |name: &str| -> u64 {
+        text.lines()
+            .find(|l| l.split_whitespace().next() == Some(name))
+            .and_then(|l| l.split_whitespace().nth(1))
+            .and_then(|n| n.parse().ok())
+            .unwrap_or(0)
+    };
+    let (flash_text, data, bss) = (section(".text"), section(".data"), section(".bss"));
+
+    let mut hil = Hil::new();
+    hil.boot();
+    // Cycles per note message: instructions run while the firmware works on it (PD4: decode
+    // and interpret, PD5: write the boards, PD2: the receive interrupt), for Note-On and
+    // Note-Off messages with their own status byte and with running status.
+    let mut interp = Vec::new();
+    let mut bus_cycles = Vec::new();
+    let mut latency = Vec::new();
+    let msgs: [&[u8]; 6] = [
+        &[0x90, 60, 100],
+        &[0x90, 64, 100],
+        &[67, 100],
+        &[0x80, 60, 0],
+        &[64, 0],
+        &[67, 0],
+    ];
+    for m in msgs {
+        let log_from = hil.bus.borrow().log.len();
+        let (mut work, mut flush) = (0u64, 0u64);
+        let mut last_put = 0;
+        for &b in m {
+            last_put = hil.cycles.get();
+            hil.put(b);
+            let end = hil.cycles.get() + BYTE_US * 8;
+            while hil.cycles.get() < end {
+                let n = hil.step();
+                if hil.pin('D', 4) || hil.pin('D', 2) {
+                    work += n;
+                }
+                if hil.pin('D', 5) {
+                    flush += n;
+                }
+            }
+        }
+        let end = hil.cycles.get() + 3_000 * 8;
+        while hil.cycles.get() < end {
+            let n = hil.step();
+            if hil.pin('D', 4) || hil.pin('D', 2) {
+                work += n;
+            }
+            if hil.pin('D', 5) {
+                flush += n;
+            }
+        }
+        interp.push(work);
+        bus_cycles.push(flush);
+        // From the end of the last byte's stop bit (when simavr raises receive-complete) to
+        // the STOP of the board write.
+        let rx_done = last_put + SIM_BYTE_US * 8;
+        let bus = hil.bus.borrow();
+        let stop = bus.log[log_from..]
+            .iter()
+            .find(|t| t.bytes[0] == 2)
+            .expect("the message made a board write")
+            .stop_cycle;
+        latency.push((stop - rx_done) as f64 / 8.0);
+    }
+    hil.drain_thru();
+
+    // The deepest stack, after a busy stretch: a whole file.
+    let (mut busy, _, _) = {
+        let data = std::fs::read("/work/shared/midi/m21-test06.mid")
+            .or_else(|_| {
+                std::fs::read(concat!(
+                    env!("CARGO_MANIFEST_DIR"),
+                    "/../../../shared/midi/m21-test06.mid"
+                ))
+            })
+            .unwrap();
+        let timed = smf_to_wire(&data);
+        let mut h = Hil::new();
+        h.boot();
+        let start = h.now_us();
+        let mut next = start;
+        for &(t, b) in timed.iter().take(400) {
+            let at = (start + t).max(next);
+            h.run_until(at * 8);
+            h.put(b);
+            next = at + BYTE_US;
+        }
+        (h, (), ())
+    };
+    busy.run_us(600_000); // the firmware publishes its stack depth every 250 ms when idle
+    let stack = busy.stack_high_water().max(hil.stack_high_water());
+
+    let avg = |v: &[u64]| v.iter().sum::<u64>() as f64 / v.len() as f64;
+    let (lmin, lmax) = latency
+        .iter()
+        .fold((f64::MAX, 0f64), |(a, b), &x| (a.min(x), b.max(x)));
+    println!("\n== ATmega16 firmware figures (simavr, 8 MHz) ==");
+    println!("ELF: {}", elf.display());
+    println!(
+        "flash: {} bytes (.text {} + .data {}) of 16384 ({:.0}%); the thesis: a 5 KB hex file (about 1.8 KB of code), ~550 lines of C",
+        flash_text + data,
+        flash_text,
+        data,
+        (flash_text + data) as f64 / 163.84
+    );
+    println!(
+        "RAM: {} bytes static (.data {} + .bss {}, the interpreter's ~600 in .data) + {} bytes deepest stack seen = {} of 1024",
+        data + bss,
+        data,
+        bss,
+        stack,
+        data + bss + stack as u64
+    );
+    println!(
+        "CPU cycles per note message (decode + interpret + receive interrupts): {:?}, mean {:.0} ({:.0} µs at 8 MHz)",
+        interp,
+        avg(&interp),
+        avg(&interp) / 8.0
+    );
+    println!(
+        "CPU cycles writing the board (busy-waiting on the TWI): {:?}, mean {:.0} ({:.0} µs)",
+        bus_cycles,
+        avg(&bus_cycles),
+        avg(&bus_cycles) / 8.0
+    );
+    println!(
+        "stop bit of the last MIDI byte -> TWI STOP of the board write: {:.0}..{:.0} µs (one MIDI byte is 320 µs; simavr's TWI takes 324 µs for the 3 data bytes and 0 for START + address: real 83.33 kHz adds ~130 µs)",
+        lmin, lmax
+    );
+    for (m, l) in msgs.iter().zip(&latency) {
+        println!("  {m:02x?}: {l:.0} µs");
+    }
+    assert!(data + bss + (stack as u64) < 1024);
+    assert!(flash_text + data < 16384);
+}

@@ -1,0 +1,61 @@
+//! Time from Timer1: 8 MHz / 8 = one tick a microsecond, extended past 16 bits by counting
+//! overflows (every 65.536 ms) in an interrupt: a 48-bit microsecond clock, 8.9 years.
+
+use avr_device::atmega16::TC1;
+use core::ptr::{addr_of, addr_of_mut, read_volatile, write_volatile};
+
+/// Overflows of Timer1 since power-up.
+static mut OVERFLOWS: u32 = 0;
+
+const TOV1: u8 = 1 << 2;
+const TOIE1: u8 = 1 << 2;
+const CS11: u8 = 1 << 1;
+
+fn tc1() -> &'static avr_device::atmega16::tc1::RegisterBlock {
+    // SAFETY: Timer1 is only read here after `start`, and written only by `start`.
+    unsafe { &*TC1::ptr() }
+}
+
+/// Starts Timer1 at 1 MHz, free running, with the overflow interrupt.
+pub fn start(tc: TC1) {
+    tc.tccr1a.write(|w| unsafe { w.bits(0) });
+    tc.tcnt1.write(|w| unsafe { w.bits(0) });
+    tc.tccr1b.write(|w| unsafe { w.bits(CS11) });
+    tc.timsk.modify(|r, w| unsafe { w.bits(r.bits() | TOIE1) });
+}
+
+/// The low 16 bits of the clock (µs), for short timeouts. Safe to call with interrupts on:
+/// no interrupt handler touches Timer1's 16-bit TEMP register.
+#[inline(always)]
+pub fn ticks16() -> u16 {
+    tc1().tcnt1.read().bits()
+}
+
+/// Microseconds since power-up.
+pub fn now_us() -> u64 {
+    avr_device::interrupt::free(|_| {
+        let t = tc1().tcnt1.read().bits();
+        // SAFETY: interrupts are off, so the overflow handler cannot run meanwhile.
+        let mut ovf = unsafe { read_volatile(addr_of!(OVERFLOWS)) };
+        // An overflow that happened after interrupts went off is still pending.
+        if tc1().tifr.read().bits() & TOV1 != 0 && t < 0x8000 {
+            ovf = ovf.wrapping_add(1);
+        }
+        ((ovf as u64) << 16) | t as u64
+    })
+}
+
+/// Busy-waits `us` microseconds (at most 65 ms).
+pub fn delay_us(us: u16) {
+    let t0 = ticks16();
+    while ticks16().wrapping_sub(t0) < us {}
+}
+
+#[avr_device::interrupt(atmega16)]
+fn TIMER1_OVF() {
+    // SAFETY: the only writer; the reader masks interrupts.
+    unsafe {
+        let p = addr_of_mut!(OVERFLOWS);
+        write_volatile(p, read_volatile(p).wrapping_add(1));
+    }
+}

@@ -1,0 +1,112 @@
+//! The MIDI UART: 31250 baud 8N1 (UBRR = 15 at 8 MHz, as in the thesis), received by
+//! interrupt into a ring buffer, and every byte sent straight on (soft MIDI thru) from the
+//! interrupt handlers, in order, whatever the main loop is doing.
+
+use avr_device::atmega16::USART;
+use core::ptr::{addr_of, addr_of_mut, read_volatile, write_volatile};
+
+/// UBRR for 31250 baud at 8 MHz: 8 MHz / (16 · 31250) − 1.
+pub const UBRR: u8 = 15;
+
+const RX_N: usize = 64; // 20 ms of MIDI at full speed
+const TX_N: usize = 16;
+
+static mut RX_BUF: [u8; RX_N] = [0; RX_N];
+/// Written by the receive interrupt only.
+static mut RX_HEAD: u8 = 0;
+/// Written by the main loop only.
+static mut RX_TAIL: u8 = 0;
+/// Bytes lost because the ring was full.
+static mut RX_LOST: u8 = 0;
+
+// Thru: touched only by the two interrupt handlers, which never nest.
+static mut TX_BUF: [u8; TX_N] = [0; TX_N];
+static mut TX_HEAD: u8 = 0;
+static mut TX_TAIL: u8 = 0;
+
+const RXC: u8 = 1 << 7;
+const UDRE: u8 = 1 << 5;
+const RXCIE: u8 = 1 << 7;
+const UDRIE: u8 = 1 << 5;
+const RXEN: u8 = 1 << 4;
+const TXEN: u8 = 1 << 3;
+
+fn usart() -> &'static avr_device::atmega16::usart::RegisterBlock {
+    // SAFETY: after `start`, the registers are used by the handlers below only, and
+    // UCSRB's UDRIE bit is changed only inside them.
+    unsafe { &*USART::ptr() }
+}
+
+/// 31250 baud, 8N1 (UCSRC's reset value), receiver and transmitter on, receive interrupt on.
+pub fn start(u: USART) {
+    u.ubrrh().write(|w| unsafe { w.bits(0) });
+    u.ubrrl.write(|w| unsafe { w.bits(UBRR) });
+    u.ucsrb.write(|w| unsafe { w.bits(RXCIE | RXEN | TXEN) });
+}
+
+/// The next received byte, if any.
+pub fn pop() -> Option<u8> {
+    // SAFETY: single producer (the handler writes HEAD after the byte), single consumer.
+    unsafe {
+        let tail = read_volatile(addr_of!(RX_TAIL));
+        if tail == read_volatile(addr_of!(RX_HEAD)) {
+            return None;
+        }
+        let b = read_volatile(addr_of!(RX_BUF[tail as usize]));
+        write_volatile(addr_of_mut!(RX_TAIL), (tail + 1) % RX_N as u8);
+        Some(b)
+    }
+}
+
+/// Whether a received byte is waiting.
+pub fn pending() -> bool {
+    unsafe { read_volatile(addr_of!(RX_TAIL)) != read_volatile(addr_of!(RX_HEAD)) }
+}
+
+#[avr_device::interrupt(atmega16)]
+fn USART_RXC() {
+    crate::probe::isr_enter();
+    let u = usart();
+    while u.ucsra.read().bits() & RXC != 0 {
+        let b = u.udr.read().bits();
+        // SAFETY: see the statics.
+        unsafe {
+            let head = read_volatile(addr_of!(RX_HEAD));
+            let next = (head + 1) % RX_N as u8;
+            if next == read_volatile(addr_of!(RX_TAIL)) {
+                let lost = read_volatile(addr_of!(RX_LOST));
+                write_volatile(addr_of_mut!(RX_LOST), lost.saturating_add(1));
+            } else {
+                write_volatile(addr_of_mut!(RX_BUF[head as usize]), b);
+                write_volatile(addr_of_mut!(RX_HEAD), next);
+            }
+            // Thru: straight out if nothing is queued and the data register is free.
+            if TX_HEAD == TX_TAIL && u.ucsra.read().bits() & UDRE != 0 {
+                u.udr.write(|w| w.bits(b));
+            } else {
+                let next = (TX_HEAD + 1) % TX_N as u8;
+                if next != TX_TAIL {
+                    TX_BUF[TX_HEAD as usize] = b;
+                    TX_HEAD = next;
+                }
+                u.ucsrb.modify(|r, w| w.bits(r.bits() | UDRIE));
+            }
+        }
+    }
+    crate::probe::isr_exit();
+}
+
+#[avr_device::interrupt(atmega16)]
+fn USART_UDRE() {
+    let u = usart();
+    // SAFETY: see the statics.
+    unsafe {
+        if TX_HEAD != TX_TAIL {
+            u.udr.write(|w| w.bits(TX_BUF[TX_TAIL as usize]));
+            TX_TAIL = (TX_TAIL + 1) % TX_N as u8;
+        }
+        if TX_HEAD == TX_TAIL {
+            u.ucsrb.modify(|r, w| w.bits(r.bits() & !UDRIE));
+        }
+    }
+}

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# Builds the ATmega16 firmware and runs its hardware-in-the-loop tests in simavr.
+#
+# From a fresh machine: installs what is missing (Debian packages, the nightly's rust-src),
+# builds the firmware ELF at
+#     firmware/atmega16/target/avr-none/release/orch-atmega16.elf
+# prints its size, then builds and runs firmware/atmega16-hil (avr-tester, which builds
+# simavr from source). Extra arguments go to the test binary, e.g. `firmware/test.sh figures`.
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+
+need=()
+for pkg in gcc-avr binutils-avr avr-libc simavr libclang-dev libelf-dev libzstd-dev pkg-config; do
+    dpkg -s "$pkg" >/dev/null 2>&1 || need+=("$pkg")
+done
+if ((${#need[@]})); then
+    echo "== installing ${need[*]}"
+    sudo_=""
+    [ "$(id -u)" = 0 ] || sudo_="sudo"
+    $sudo_ apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo_ apt-get install -y -qq "${need[@]}" >/dev/null
+fi
+
+# The toolchain pinned in firmware/atmega16/rust-toolchain.toml, with rust-src for build-std.
+channel="$(sed -n 's/^channel *= *"\(.*\)"/\1/p' "$here/atmega16/rust-toolchain.toml")"
+if ! rustup run "$channel" rustc --version >/dev/null 2>&1; then
+    echo "== installing toolchain $channel"
+    rustup toolchain install "$channel" --profile minimal
+fi
+if ! rustup component list --toolchain "$channel" --installed | grep -q '^rust-src'; then
+    echo "== adding rust-src to $channel"
+    rustup component add rust-src --toolchain "$channel"
+fi
+
+echo "== building the firmware ($channel, avr-none, atmega16)"
+(cd "$here/atmega16" && cargo build --release --locked)
+elf="$here/atmega16/target/avr-none/release/orch-atmega16.elf"
+echo "== $elf"
+avr-size --format=avr --mcu=atmega16 "$elf" | grep -E 'Program|Data'
+
+echo "== hardware-in-the-loop tests (simavr via avr-tester)"
+cd "$here/atmega16-hil"
+ORCH_ATMEGA16_ELF="$elf" timeout 900 cargo test --locked -- --nocapture "$@"
