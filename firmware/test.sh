@@ -7,6 +7,9 @@
 # prints its size, then builds and runs firmware/atmega16-hil (avr-tester, which builds
 # simavr from source). Extra arguments go to the test binary, e.g. `firmware/test.sh figures`.
 set -euo pipefail
+# The firmware packages build in their own target folders (the ELF path below), whatever the
+# caller's CARGO_TARGET_DIR says.
+unset CARGO_TARGET_DIR
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 
 need=()
