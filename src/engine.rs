@@ -89,6 +89,15 @@ impl Engine {
         Ok(end)
     }
 
+    /// Stops at `t_us`: everything that happened is written, then every key is released at
+    /// once (a person stopped the performance). Returns the time it ended.
+    pub fn stop(&mut self, t_us: u64) -> anyhow::Result<u64> {
+        self.advance(t_us)?;
+        self.interp.all_off(Instant::from_micros(t_us));
+        self.flush(t_us)?;
+        Ok(t_us)
+    }
+
     fn flush(&mut self, t_us: u64) -> anyhow::Result<()> {
         self.robot.set_time(Instant::from_micros(t_us));
         self.interp

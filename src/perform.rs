@@ -226,7 +226,10 @@ pub fn perform(
     }
     let last =
         stopped_at.unwrap_or_else(|| start + sched.entries().last().map_or(0, |e| e.send_us));
-    let drained = engine.drain(last + 1)?;
+    let drained = match stopped_at {
+        Some(t) => engine.stop(t)?,
+        None => engine.drain(last + 1)?,
+    };
     let longest_release = (0..c.range.keys())
         .map(|k| robot.mechanics.for_key(k as u8).release_delay.as_micros() as u64)
         .max()

@@ -387,3 +387,51 @@ fn analyze_says_what_will_go_wrong() {
         "the MANIFEST's out-of-range count"
     );
 }
+
+#[test]
+fn play_tempo_and_no_compensation_flags_change_the_performance() {
+    let run = |extra: &[&str]| -> Value {
+        let out = orch()
+            .args(["play", "--fast", "--json"])
+            .args(extra)
+            .arg(corpus("m21-test06.mid"))
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let normal = run(&[]);
+    let fast = run(&["--tempo", "2"]);
+    let late = run(&["--no-compensation"]);
+    let secs = |v: &Value| v["seconds"].as_f64().unwrap();
+    assert!(
+        (secs(&fast) - secs(&normal) / 2.0).abs() < 0.5,
+        "{} vs {}",
+        secs(&fast),
+        secs(&normal)
+    );
+    assert!(normal["onset_ms"]["median"].as_f64().unwrap() < 1.0);
+    assert!(
+        late["onset_ms"]["median"].as_f64().unwrap() >= 15.0,
+        "{late}"
+    );
+    let (code, _, err) = run_err(&["play", "--fast", "--tempo", "0"]);
+    assert_eq!(code, 2, "{err}");
+}
+
+fn run_err(args: &[&str]) -> (i32, Vec<u8>, String) {
+    let out = orch()
+        .args(args)
+        .arg(corpus("m21-test06.mid"))
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap(),
+        out.stdout,
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}

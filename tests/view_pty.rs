@@ -29,7 +29,7 @@ fn chord_file() -> Vec<u8> {
 }
 
 #[test]
-fn live_view_under_a_pseudo_terminal_lights_the_pressed_keys() {
+fn live_view_under_a_pseudo_terminal_lights_the_pressed_keys_and_q_stops_it() {
     assert!(
         Command::new("tmux").arg("-V").output().is_ok(),
         "tmux is needed for this test; scripts/test.sh installs it"
@@ -52,7 +52,7 @@ fn live_view_under_a_pseudo_terminal_lights_the_pressed_keys() {
         env!("CARGO_BIN_EXE_orch"),
         file.display()
     );
-    let started = tmux(&["new-session", "-d", "-x", "100", "-y", "12", &command]);
+    let started = tmux(&["new-session", "-d", "-x", "100", "-y", "30", &command]);
     assert!(
         started.status.success(),
         "{}",
@@ -60,7 +60,17 @@ fn live_view_under_a_pseudo_terminal_lights_the_pressed_keys() {
     );
     sleep(Duration::from_millis(2000));
     let screen = String::from_utf8_lossy(&tmux(&["capture-pane", "-p"]).stdout).into_owned();
+    // `q` stops the performance early: the terminal comes back and the report is printed.
+    tmux(&["send-keys", "q"]);
+    sleep(Duration::from_millis(1500));
+    let after = String::from_utf8_lossy(&tmux(&["capture-pane", "-p"]).stdout).into_owned();
     tmux(&["kill-server"]);
+    assert!(after.contains("notes in the file      3"), "{after}");
+    assert!(
+        !after.contains("cut by the watchdog"),
+        "stopping is not a watchdog cut: {after}"
+    );
+    assert!(!after.contains("down: "), "the view is gone: {after}");
     assert!(screen.contains("orch play"), "{screen}");
     assert!(screen.contains("down: C4 E4 G4"), "{screen}");
     assert!(screen.contains("bar 1 beat"), "{screen}");
