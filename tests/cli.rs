@@ -435,3 +435,33 @@ fn run_err(args: &[&str]) -> (i32, Vec<u8>, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+#[test]
+fn decode_shows_each_message_as_it_arrives_on_a_live_stream() {
+    use std::io::{BufRead, BufReader, Write as _};
+    use std::process::{Command as Std, Stdio};
+    let mut child = Std::new(env!("CARGO_BIN_EXE_orch"))
+        .args(["decode", "--hex", "--json", "-"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Should the output wait for the end of the input, the read below would block: end it.
+    let pid = child.id().to_string();
+    std::thread::spawn(move || {
+        std::thread::sleep(std::time::Duration::from_secs(20));
+        let _ = Std::new("kill").arg(&pid).status();
+    });
+    let mut stdin = child.stdin.take().unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    // The line comes out while the input is still open, as from a MIDI port.
+    writeln!(stdin, "90 3C 7F").unwrap();
+    stdin.flush().unwrap();
+    let first: Value = serde_json::from_str(&lines.next().unwrap().unwrap()).unwrap();
+    assert_eq!(first["type"], "note_on");
+    writeln!(stdin, "80 3C 00").unwrap();
+    drop(stdin);
+    let rest: Vec<String> = lines.map(|l| l.unwrap()).collect();
+    assert_eq!(rest.len(), 2, "{rest:?}");
+    assert!(child.wait().unwrap().success());
+}
