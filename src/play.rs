@@ -39,6 +39,21 @@ fn scale(tempo: f64) -> anyhow::Result<TempoScale> {
     })
 }
 
+/// The report of a performance, with the same piece rendered without compensation beside it.
+fn report(
+    song: &Song,
+    robot: &Robot,
+    options: Options,
+    played: &Outcome,
+) -> anyhow::Result<Report> {
+    let plain = Options {
+        compensation: false,
+        ..options
+    };
+    let uncompensated = render(song, robot, plain)?;
+    Ok(Report::new(song.notes() as u64, played, &uncompensated))
+}
+
 /// Plays on the virtual clock: as fast as the machine goes.
 pub fn render(song: &Song, robot: &Robot, options: Options) -> anyhow::Result<Outcome> {
     perform(song, robot, options, None, |_| true)
@@ -56,16 +71,8 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
     } else {
         play_live(&song, &robot, options, args)?
     };
-    let uncompensated = render(
-        &song,
-        &robot,
-        Options {
-            compensation: false,
-            ..options
-        },
-    )?;
     print_report(
-        &Report::new(song.notes() as u64, &played, &uncompensated),
+        &report(&song, &robot, options, &played)?,
         args.json,
         &args.file,
     )
@@ -134,15 +141,7 @@ pub fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
         scale: scale(args.tempo)?,
     };
     let played = render(&song, &robot, options)?;
-    let uncompensated = render(
-        &song,
-        &robot,
-        Options {
-            compensation: false,
-            ..options
-        },
-    )?;
-    let report = Report::new(song.notes() as u64, &played, &uncompensated);
+    let report = report(&song, &robot, options, &played)?;
     if args.json {
         return print_report(&report, true, &args.file);
     }
