@@ -390,7 +390,7 @@ fn analyze_says_what_will_go_wrong() {
 
 #[test]
 fn play_tempo_and_no_compensation_flags_change_the_performance() {
-    let run = |extra: &[&str]| -> Value {
+    let report = |extra: &[&str]| -> Value {
         let out = orch()
             .args(["play", "--fast", "--json"])
             .args(extra)
@@ -404,9 +404,9 @@ fn play_tempo_and_no_compensation_flags_change_the_performance() {
         );
         serde_json::from_slice(&out.stdout).unwrap()
     };
-    let normal = run(&[]);
-    let fast = run(&["--tempo", "2"]);
-    let late = run(&["--no-compensation"]);
+    let normal = report(&[]);
+    let fast = report(&["--tempo", "2"]);
+    let late = report(&["--no-compensation"]);
     let secs = |v: &Value| v["seconds"].as_f64().unwrap();
     assert!(
         (secs(&fast) - secs(&normal) / 2.0).abs() < 0.5,
@@ -419,21 +419,12 @@ fn play_tempo_and_no_compensation_flags_change_the_performance() {
         late["onset_ms"]["median"].as_f64().unwrap() >= 15.0,
         "{late}"
     );
-    let (code, _, err) = run_err(&["play", "--fast", "--tempo", "0"]);
+    let file = corpus("m21-test06.mid");
+    let (code, _, err) = run(
+        &["play", "--fast", "--tempo", "0", file.to_str().unwrap()],
+        "",
+    );
     assert_eq!(code, 2, "{err}");
-}
-
-fn run_err(args: &[&str]) -> (i32, Vec<u8>, String) {
-    let out = orch()
-        .args(args)
-        .arg(corpus("m21-test06.mid"))
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap(),
-        out.stdout,
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 #[test]

@@ -343,11 +343,10 @@ fn figures() {
     for m in msgs {
         let log_from = hil.bus.borrow().log.len();
         let (mut work, mut flush) = (0u64, 0u64);
-        let mut last_put = 0;
-        for &b in m {
-            last_put = hil.cycles.get();
-            hil.put(b);
-            let end = hil.cycles.get() + BYTE_US * 8;
+        // Runs the simulator for `us` µs, counting the cycles spent interpreting (PD4, PD2)
+        // and writing the boards (PD5).
+        let mut run_for = |hil: &mut Hil, us: u64| {
+            let end = hil.cycles.get() + us * 8;
             while hil.cycles.get() < end {
                 let n = hil.step();
                 if hil.pin('D', 4) || hil.pin('D', 2) {
@@ -357,17 +356,14 @@ fn figures() {
                     flush += n;
                 }
             }
+        };
+        let mut last_put = 0;
+        for &b in m {
+            last_put = hil.cycles.get();
+            hil.put(b);
+            run_for(&mut hil, BYTE_US);
         }
-        let end = hil.cycles.get() + 3_000 * 8;
-        while hil.cycles.get() < end {
-            let n = hil.step();
-            if hil.pin('D', 4) || hil.pin('D', 2) {
-                work += n;
-            }
-            if hil.pin('D', 5) {
-                flush += n;
-            }
-        }
+        run_for(&mut hil, 3_000);
         interp.push(work);
         bus_cycles.push(flush);
         // From the end of the last byte's stop bit (when simavr raises receive-complete) to
