@@ -129,6 +129,11 @@ impl Setup {
             restrike_gap: Duration::from_millis(8 * (h[2] >> 4) as u32),
             min_press: Duration::from_millis(h[3] as u32 % 30),
             watchdog: (flags & 0x20 == 0).then(|| Duration::from_secs(4)),
+            late_limit: (flags & 0x08 == 0).then(|| Duration::from_millis(h[1] as u32 % 64)),
+            duty: (flags & 0x80 == 0).then(|| orch_core::DutyLimit {
+                window: Duration::from_millis(400),
+                max_on: Duration::from_millis(20 + h[1] as u32),
+            }),
         };
         let channels = if flags & 0x04 != 0 {
             ChannelMask(u16::from_le_bytes([h[1], h[1].rotate_left(3)]))
@@ -143,6 +148,11 @@ impl Setup {
                 OutOfRange::Fold
             },
             sustain: flags & 0x02 != 0,
+            overlap: if h[2] & 0x08 != 0 {
+                orch_core::Overlap::Hold
+            } else {
+                orch_core::Overlap::Restrike
+            },
             guard,
             ..Config::THESIS
         };

@@ -18,6 +18,8 @@ pub const MAX_LIMIT: Duration = Duration::from_secs(30 * 60);
 /// | [`max_keys_down`](Self::max_keys_down) | 16 | The power budget. More than two hands (10 fingers), below the 22–26 keys per supply of the DIY pianos, and one board's worth of outputs. When it is reached the **new note is refused** (counted in [`Stats::dropped_power`](crate::Stats::dropped_power)); keys already down are never cut for it, because a cut note is heard as a mistake twice, and a late one would be too. |
 /// | [`restrike_gap`](Self::restrike_gap) | 60 ms | A key must be up this long before it strikes again, so a repeated note releases, waits and presses again instead of smearing. The DIY pianos re-strike after 52–80 ms; a grand's action repeats about 14 times a second (71 ms a cycle). |
 /// | [`min_press`](Self::min_press) | 20 ms | How long a delayed re-strike is held when its note was already released before it could strike (a note shorter than the rest it had to wait for). It still sounds, rather than being lost: the DIY pianos strike at full power for about 18 ms. Notes that strike on time are released when their Note-Off says. |
+/// | [`late_limit`](Self::late_limit) | 30 ms | A re-strike that would have to wait longer than this for its key's rest is dropped (counted as too fast) instead of sounding late: people hear a note as late from about 20–30 ms, and a late note in a fast repeated figure would push every later one further behind. |
+/// | [`duty`](Self::duty) | 30 s in any 60 s | Energised time per key. The hold limit misses a key struck again just before it expires (struck every 9.9 s it is powered 99 % of the time). Small push solenoids are rated for intermittent duty, commonly 25–50 %, and one held on continuously runs hot within a minute: so a key may be on at most half of a minute. Music never comes near it (a legato repeated note is on about 90 % of the time only for a few bars); a stuck stream does. See [`DutyLimit`]. |
 /// | [`watchdog`](Self::watchdog) | 4 s | If no byte arrives this long while keys are down, the sender is taken as gone and every key is released. Longer than the silences of held chords in slow music, much shorter than the minute in which a held solenoid overheats. Once an Active Sensing byte (0xFE) has been seen, the specification's 300 ms applies as well. |
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct GuardConfig {
@@ -34,6 +36,62 @@ pub struct GuardConfig {
     pub min_press: Duration,
     /// Release every key if no byte arrives for this long while keys are down; `None` for never.
     pub watchdog: Option<Duration>,
+    /// The longest a re-strike may wait for its key's rest; a note that would wait longer is
+    /// dropped as too fast. `None`: any wait.
+    pub late_limit: Option<Duration>,
+    /// The most a key may be energised over time; `None`: no limit. Needs the `duty-limit`
+    /// feature (on by default; without it the default is `None` and `Some` is refused).
+    pub duty: Option<DutyLimit>,
+}
+
+/// A limit on each key's energised time: at most `max_on` in a window of `window`.
+///
+/// Kept per key as a leaky bucket of "heat" (2 bytes a key): energised time adds to it, and
+/// it drains all the time at the allowed duty, `max_on / window`. When it reaches `max_on`
+/// the key is released and its notes forgotten (counted in
+/// [`Stats::cut_by_duty_limit`](crate::Stats::cut_by_duty_limit)); a later note strikes
+/// afresh and is cut again as soon as the bucket is full, so a key can never be on for more
+/// than the duty on average. A key on below the duty is never cut; one held on from cold is
+/// cut after `max_on / (1 − duty)` (60 s with the defaults, so the 10 s hold limit acts first);
+/// one struck again every 9.9 s (99 % duty) is cut within about a minute.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct DutyLimit {
+    /// The window, at most [`MAX_LIMIT`].
+    pub window: Duration,
+    /// The energised time allowed in it: above 0, at most the window and at most 60 s.
+    pub max_on: Duration,
+}
+
+impl DutyLimit {
+    /// 30 s in any 60 s (50 %).
+    pub const DEFAULT: Self = Self {
+        window: Duration::from_secs(60),
+        max_on: Duration::from_secs(30),
+    };
+
+    /// The most `max_on` may be: 60 s (the heat is kept in 16 bits of milliseconds).
+    pub const MAX_ON: Duration = Duration::from_secs(60);
+}
+
+/// How a key behaves when a second note lands on it while it is down (the same note on
+/// another channel, another note folded onto it, or the same note again with no Note-Off
+/// between).
+///
+/// The default is [`Overlap::Restrike`]: the ear follows onsets, so a note that only joins a
+/// key already down is a note nobody hears, while a re-struck key is heard, with the earlier
+/// note cut a little short (which the ear forgives). A sequencer that knows the future
+/// releases the key early so the re-strike still lands on time; a re-strike that cannot
+/// sound within `late_limit` is dropped as too fast and the key stays down.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum Overlap {
+    /// The key stays down for both: the new note joins it without a strike of its own (the
+    /// thesis's behaviour, and the DIY pianos' "count overlapping note-ons"). The same note
+    /// again on its own channel still re-strikes.
+    Hold,
+    /// The new note releases the key, lets it rest for the re-strike gap and strikes again.
+    /// Notes struck together (within `min_press` of the strike) still join it.
+    #[default]
+    Restrike,
 }
 
 impl GuardConfig {
@@ -45,6 +103,12 @@ impl GuardConfig {
         restrike_gap: Duration::from_millis(60),
         min_press: Duration::from_millis(20),
         watchdog: Some(Duration::from_secs(4)),
+        late_limit: Some(Duration::from_millis(30)),
+        duty: if cfg!(feature = "duty-limit") {
+            Some(DutyLimit::DEFAULT)
+        } else {
+            None
+        },
     };
 
     /// The guard switched off.
@@ -61,6 +125,8 @@ impl GuardConfig {
         restrike_gap: Duration::ZERO,
         min_press: Duration::ZERO,
         watchdog: None,
+        late_limit: None,
+        duty: None,
     };
 }
 
@@ -84,6 +150,8 @@ pub struct Config<const B: usize> {
     /// Whether the sustain pedal (CC 64) holds released keys down. Default: off, because a
     /// held solenoid heats up.
     pub sustain: bool,
+    /// What a second note on a key that is down does. Default: [`Overlap::Restrike`].
+    pub overlap: Overlap,
     /// The safety guard. Default: on, see [`GuardConfig`].
     pub guard: GuardConfig,
 }
@@ -96,6 +164,7 @@ impl Config<4> {
         out_of_range: OutOfRange::Fold,
         layout: Layout::THESIS,
         sustain: false,
+        overlap: Overlap::Restrike,
         guard: GuardConfig::DEFAULT,
     };
 }
@@ -132,6 +201,11 @@ pub enum ConfigError {
     LimitTooLong,
     /// `max_keys_down` is 0: nothing could ever play.
     NoKeysAllowed,
+    /// The duty limit's `max_on` is 0, longer than its window, or longer than
+    /// [`DutyLimit::MAX_ON`].
+    BadDuty,
+    /// A duty limit was asked of a build without the `duty-limit` feature.
+    DutyUnsupported,
 }
 
 impl core::fmt::Display for ConfigError {
@@ -152,6 +226,12 @@ impl core::fmt::Display for ConfigError {
             ConfigError::NoKeysAllowed => {
                 f.write_str("guard.max_keys_down is 0: no key could play")
             }
+            ConfigError::DutyUnsupported => {
+                f.write_str("guard duty limit: this build has no duty-limit feature")
+            }
+            ConfigError::BadDuty => f.write_str(
+                "guard duty limit: max_on must be above 0, at most the window and at most 60 s",
+            ),
         }
     }
 }
@@ -183,11 +263,24 @@ impl<const B: usize> Config<B> {
                 || too_long(g.watchdog)
                 || g.restrike_gap > MAX_LIMIT
                 || g.min_press > MAX_LIMIT
+                || too_long(g.late_limit)
+                || g.duty.is_some_and(|d| d.window > MAX_LIMIT)
             {
                 return Err(ConfigError::LimitTooLong);
             }
             if g.max_keys_down == 0 {
                 return Err(ConfigError::NoKeysAllowed);
+            }
+            if g.duty.is_some() && !cfg!(feature = "duty-limit") {
+                return Err(ConfigError::DutyUnsupported);
+            }
+            if let Some(d) = g.duty {
+                if d.max_on == Duration::ZERO
+                    || d.max_on > d.window
+                    || d.max_on > DutyLimit::MAX_ON
+                {
+                    return Err(ConfigError::BadDuty);
+                }
             }
         }
         Ok(())

@@ -35,12 +35,16 @@ pub(crate) const RELEASE_AFTER: u8 = 0b1_0000;
 /// The key struck late (after waiting for its re-strike gap): it is held at least `min_press`.
 pub(crate) const LATE: u8 = 0b10_0000;
 
-/// Physical state of `K` keys: 6 bytes a key.
+/// Physical state of `K` keys: 8 bytes a key (6 without the `duty-limit` feature).
 #[derive(Clone, Debug)]
 pub(crate) struct Fingers<const K: usize> {
     flags: [u8; K],
     stamp: [u32; K],
     velocity: [u8; K],
+    /// The duty limit's heat, in ms (see [`DutyLimit`](crate::DutyLimit)), as of the key's
+    /// last press or release.
+    #[cfg(feature = "duty-limit")]
+    heat: [u16; K],
     /// Keys in `DOWN`.
     pub down: u8,
     /// Keys in `PENDING`.
@@ -53,6 +57,8 @@ impl<const K: usize> Fingers<K> {
             flags: [READY; K],
             stamp: [0; K],
             velocity: [0; K],
+            #[cfg(feature = "duty-limit")]
+            heat: [0; K],
             down: 0,
             pending: 0,
         }
@@ -111,6 +117,24 @@ impl<const K: usize> Fingers<K> {
         };
         self.flags[k] = phase | keep;
     }
+
+    #[cfg(feature = "duty-limit")]
+    pub fn heat_ms(&self, key: u8) -> u16 {
+        self.heat[key as usize]
+    }
+
+    #[cfg(feature = "duty-limit")]
+    pub fn set_heat_ms(&mut self, key: u8, heat: u64) {
+        self.heat[key as usize] = heat.min(u16::MAX as u64) as u16;
+    }
+
+    #[cfg(not(feature = "duty-limit"))]
+    pub fn heat_ms(&self, _key: u8) -> u16 {
+        0
+    }
+
+    #[cfg(not(feature = "duty-limit"))]
+    pub fn set_heat_ms(&mut self, _key: u8, _heat: u64) {}
 
     pub fn set_velocity(&mut self, key: u8, velocity: u8) {
         self.velocity[key as usize] = velocity;

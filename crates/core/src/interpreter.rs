@@ -1,13 +1,15 @@
 //! The interpreter: decoded messages and the current time in, finger frames out.
 
-use crate::config::{Config, ConfigError, GuardConfig};
+use crate::config::{Config, ConfigError, GuardConfig, Overlap};
 use crate::decoder::{Counters, Decoder};
 use crate::fingers::{
     Fingers, AGE_CAP, DOWN, FOLDED, LATE, PENDING, READY, RELEASE_AFTER, RELEASING,
 };
 use crate::frame::{FingerFrame, FlushError};
 use crate::held::{HeldNotes, NoteTable};
+use crate::keymap::KeyOf;
 use crate::message::Message;
+use crate::outcome::{DropReason, Landing, NoteEvent, NoteSink};
 use crate::output::FingerBoards;
 use crate::stats::Stats;
 use crate::time::{Duration, Instant};
@@ -128,8 +130,12 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
                 dropped_range: 0,
                 dropped_power: 0,
                 dropped_cancelled: 0,
+                dropped_too_fast: 0,
+                dropped_stopped: 0,
+                joined: 0,
                 restrikes_delayed: 0,
                 cut_by_hold_limit: 0,
+                cut_by_duty_limit: 0,
                 cut_by_watchdog: 0,
                 peak_keys_down: 0,
             },
@@ -197,35 +203,57 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
 
     /// Feeds one received byte at time `now`.
     pub fn feed(&mut self, byte: u8, now: Instant) {
-        self.tick(now);
+        self.feed_with(byte, now, &mut ());
+    }
+
+    /// [`feed`](Self::feed), telling `sink` what became of each note ([`NoteEvent`]).
+    pub fn feed_with<S: NoteSink>(&mut self, byte: u8, now: Instant, sink: &mut S) {
+        self.tick_with(now, sink);
         let now = self.clock;
         self.last_input = now;
         for message in self.decoder.push(byte) {
-            self.apply(message, now);
+            self.apply(message, now, sink);
         }
     }
 
     /// Feeds bytes that all arrived at `now`.
     pub fn feed_slice(&mut self, bytes: &[u8], now: Instant) {
+        self.feed_slice_with(bytes, now, &mut ());
+    }
+
+    /// [`feed_slice`](Self::feed_slice), telling `sink` what became of each note.
+    pub fn feed_slice_with<S: NoteSink>(&mut self, bytes: &[u8], now: Instant, sink: &mut S) {
         for &byte in bytes {
-            self.feed(byte, now);
+            self.feed_with(byte, now, sink);
         }
     }
 
     /// Handles a message decoded elsewhere, received at `now`.
     pub fn handle(&mut self, message: Message, now: Instant) {
-        self.tick(now);
+        self.handle_with(message, now, &mut ());
+    }
+
+    /// [`handle`](Self::handle), telling `sink` what became of each note.
+    pub fn handle_with<S: NoteSink>(&mut self, message: Message, now: Instant, sink: &mut S) {
+        self.tick_with(now, sink);
         let now = self.clock;
         self.last_input = now;
-        self.apply(message, now);
+        self.apply(message, now, sink);
     }
 
     /// Releases every key now: for shutdown, panics and errors. Notes waiting to re-strike are
-    /// cancelled and the sustain pedals let go. Flush afterwards to put it on the bus.
+    /// cancelled (counted as stopped) and the sustain pedals let go. Flush afterwards to put it
+    /// on the bus.
     pub fn all_off(&mut self, now: Instant) {
+        self.all_off_with(now, &mut ());
+    }
+
+    /// [`all_off`](Self::all_off), telling `sink` about the notes that were waiting
+    /// ([`NoteEvent::WaitEnded`] with [`DropReason::Stopped`]).
+    pub fn all_off_with<S: NoteSink>(&mut self, now: Instant, sink: &mut S) {
         self.advance(now);
         let now = self.clock;
-        self.release_everything(now);
+        self.release_everything(now, DropReason::Stopped, sink);
     }
 
     /// When [`tick`](Self::tick) should next be called: the earliest hold limit, delayed
@@ -252,8 +280,15 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         next
     }
 
-    /// Runs the guard's timers at `now`: hold limits, delayed re-strikes, the watchdog.
+    /// Runs the guard's timers at `now`: hold limits, the duty limit, delayed re-strikes, the
+    /// watchdog.
     pub fn tick(&mut self, now: Instant) {
+        self.tick_with(now, &mut ());
+    }
+
+    /// [`tick`](Self::tick), telling `sink` about delayed strikes that happen
+    /// ([`NoteEvent::WaitOver`]) or are cancelled.
+    pub fn tick_with<S: NoteSink>(&mut self, now: Instant, sink: &mut S) {
         self.advance(now);
         let now = self.clock;
         let g = self.config.guard;
@@ -268,7 +303,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             self.sensing = false;
             if busy {
                 self.stats.cut_by_watchdog += self.fingers.down as u32;
-                self.release_everything(now);
+                self.release_everything(now, DropReason::Cancelled, sink);
             }
         }
         if now < self.due {
@@ -280,15 +315,20 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             match self.fingers.phase(key) {
                 DOWN => {
                     let hold = g.max_hold.map(Duration::as_micros);
+                    let duty = self.duty_cut_after(key);
                     let short = self.fingers.has(key, RELEASE_AFTER);
                     if hold.is_some_and(|h| age >= h) {
                         self.stats.cut_by_hold_limit += 1;
                         self.forget_key(key);
                         self.release_now(key, now);
+                    } else if duty.is_some_and(|d| age >= d) {
+                        self.stats.cut_by_duty_limit += 1;
+                        self.forget_key(key);
+                        self.release_now(key, now);
                     } else if short && age >= g.min_press.as_micros() {
                         self.release_now(key, now);
                     } else {
-                        let mut limit = hold.unwrap_or(u32::MAX);
+                        let mut limit = hold.unwrap_or(u32::MAX).min(duty.unwrap_or(u32::MAX));
                         if short {
                             limit = limit.min(g.min_press.as_micros());
                         }
@@ -304,11 +344,13 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
                         self.count_sounded(folded);
                         self.press_now(key, now);
                         self.fingers.set_flag(key, LATE, true);
-                        let mut limit = g.max_hold.unwrap_or(Duration::MAX);
+                        sink.note(NoteEvent::WaitOver { key });
+                        let mut limit = g.max_hold.unwrap_or(Duration::MAX).as_micros();
+                        limit = limit.min(self.duty_cut_after(key).unwrap_or(u32::MAX));
                         if self.fingers.has(key, RELEASE_AFTER) {
-                            limit = limit.min(g.min_press);
+                            limit = limit.min(g.min_press.as_micros());
                         }
-                        due = due.min(now + limit);
+                        due = due.min(now + Duration::from_micros(limit));
                     } else {
                         due = due.min(now + Duration::from_micros(gap - age));
                     }
@@ -346,13 +388,27 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         }
     }
 
-    fn apply(&mut self, message: Message, now: Instant) {
+    /// How long after its press the duty limit cuts `key` (down), from its heat at the
+    /// press; `None` without a duty limit.
+    fn duty_cut_after(&self, key: u8) -> Option<u32> {
+        let d = self.config.guard.duty?;
+        let (on, window) = (d.max_on.as_micros() as u64, d.window.as_micros() as u64);
+        if on >= window {
+            return None;
+        }
+        let heat = self.fingers.heat_ms(key) as u64 * 1000;
+        // Heat rises at (1 − on/window) while the key is down.
+        let left = on.saturating_sub(heat);
+        Some((left * window / (window - on)).min(u32::MAX as u64) as u32)
+    }
+
+    fn apply<S: NoteSink>(&mut self, message: Message, now: Instant, sink: &mut S) {
         match message {
             Message::NoteOn {
                 channel,
                 note,
                 velocity,
-            } if velocity.get() > 0 => self.note_on(channel, note, velocity, now),
+            } if velocity.get() > 0 => self.note_on(channel, note, velocity, now, sink),
             Message::NoteOn { channel, note, .. } | Message::NoteOff { channel, note, .. } => {
                 self.note_off(channel, note, now)
             }
@@ -377,58 +433,108 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             Message::ActiveSensing => self.sensing = true,
             Message::Reset => {
                 self.sensing = false;
-                self.release_everything(now);
+                self.release_everything(now, DropReason::Cancelled, sink);
             }
             _ => {}
         }
     }
 
-    fn note_on(&mut self, channel: Channel, note: Note, velocity: Velocity, now: Instant) {
+    fn note_on<S: NoteSink>(
+        &mut self,
+        channel: Channel,
+        note: Note,
+        velocity: Velocity,
+        now: Instant,
+        sink: &mut S,
+    ) {
         self.stats.note_ons += 1;
+        let drop = |sink: &mut S, at: Option<Landing>, reason| {
+            sink.note(NoteEvent::Dropped {
+                channel,
+                note,
+                at,
+                reason,
+            })
+        };
         if !self.config.channels.contains(channel) {
             self.stats.dropped_channel += 1;
+            drop(sink, None, DropReason::Channel);
             return;
         }
-        let Some(of) = self.config.range.key_for(note, self.config.out_of_range) else {
+        let Some(KeyOf { key, octaves }) = self.config.range.key_for(note, self.config.out_of_range)
+        else {
             self.stats.dropped_range += 1;
+            drop(sink, None, DropReason::Range);
             return;
         };
-        let key = of.key;
-        let folded = of.octaves != 0;
+        let at = Landing { key, octaves };
+        let folded = octaves != 0;
         if folded {
-            self.stats.folded_octaves += of.octaves.unsigned_abs() as u32;
+            self.stats.folded_octaves += octaves.unsigned_abs() as u32;
         }
+        let g = self.config.guard;
         let repeated = self.notes.contains(channel, note);
         let phase = self.fingers.phase(key);
         let busy = phase == DOWN || phase == PENDING;
-        // A repeat of a note whose key struck less than `min_press` ago (the same note doubled
-        // in two tracks of a score, arriving together or a few bytes apart) joins the strike:
-        // striking again before the key has even sounded would only cut it short.
-        let just_struck = phase == DOWN
-            && self.config.guard.enabled
-            && self.fingers.age(key, now) < self.config.guard.min_press.as_micros();
-        if busy && (just_struck || !repeated) && self.played(key) {
+        // A note arriving less than `min_press` after its key struck (the same note doubled in
+        // two tracks of a score, or two notes folded onto one key, arriving together or a few
+        // bytes apart) joins the strike: striking again before the key has even sounded would
+        // only cut it short. So does one arriving while the key waits to strike.
+        let with_strike = phase == PENDING
+            || (phase == DOWN && g.enabled && self.fingers.age(key, now) < g.min_press.as_micros());
+        let joins = with_strike || (!repeated && self.config.overlap == Overlap::Hold);
+        if busy && joins && self.played(key) {
             // Another note holds the key already: this one joins it.
             if self.notes.insert(channel, note, key) {
                 self.count_sounded(folded);
+                self.stats.joined += 1;
+                sink.note(NoteEvent::Joined {
+                    channel,
+                    note,
+                    at,
+                    with_strike,
+                });
             } else {
                 self.stats.dropped_power += 1;
+                drop(sink, Some(at), DropReason::Power);
             }
             return;
         }
-        // A fresh strike, or a re-strike of a key that is down only by the pedal or by this
-        // very note again.
-        let over_budget = !busy
-            && self.config.guard.enabled
-            && self.fingers.down + self.fingers.pending >= self.config.guard.max_keys_down;
-        if over_budget || !self.notes.insert(channel, note, key) {
+        // A fresh strike, or a re-strike of a key that is down (by the pedal, by this very
+        // note again, or by another note under `Overlap::Restrike`) or waiting.
+        let over_budget =
+            !busy && g.enabled && self.fingers.down + self.fingers.pending >= g.max_keys_down;
+        if over_budget {
             self.stats.dropped_power += 1;
+            drop(sink, Some(at), DropReason::Power);
+            return;
+        }
+        // How long the strike would wait for the key's rest.
+        let wait = match phase {
+            _ if !g.enabled => 0,
+            DOWN => rest_us(&g),
+            RELEASING | PENDING => rest_us(&g).saturating_sub(self.fingers.age(key, now)),
+            _ => 0,
+        };
+        if g.late_limit.is_some_and(|l| wait > l.as_micros()) {
+            // It could not sound within the late limit: the key stays as it is.
+            self.stats.dropped_too_fast += 1;
+            drop(sink, Some(at), DropReason::TooFast);
+            return;
+        }
+        if !self.notes.insert(channel, note, key) {
+            self.stats.dropped_power += 1;
+            drop(sink, Some(at), DropReason::Power);
             return;
         }
         if phase == PENDING {
-            // Still waiting: the earlier note merges into the strike, which is now this note's.
-            let earlier_folded = self.fingers.has(key, FOLDED);
-            self.count_sounded(earlier_folded);
+            // Still waiting: the earlier note's strike is taken over by this note.
+            self.stats.dropped_cancelled += 1;
+            sink.note(NoteEvent::WaitEnded {
+                key,
+                reason: DropReason::Cancelled,
+            });
+            sink.note(NoteEvent::Waiting { channel, note, at });
             self.fingers.set_velocity(key, velocity.get());
             self.fingers.set_flag(key, FOLDED, folded);
             self.fingers.set_flag(key, RELEASE_AFTER, false);
@@ -438,7 +544,11 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             self.release_now(key, now);
         }
         self.fingers.set_velocity(key, velocity.get());
-        self.strike(key, folded, now);
+        if self.strike(key, folded, now) {
+            sink.note(NoteEvent::Struck { channel, note, at });
+        } else {
+            sink.note(NoteEvent::Waiting { channel, note, at });
+        }
     }
 
     fn note_off(&mut self, channel: Channel, note: Note, now: Instant) {
@@ -484,11 +594,11 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         }
     }
 
-    fn release_everything(&mut self, now: Instant) {
+    fn release_everything<S: NoteSink>(&mut self, now: Instant, why: DropReason, sink: &mut S) {
         self.notes.clear();
         self.pedals = 0;
         for key in 0..self.keys() {
-            self.cancel_key(key, now);
+            self.cancel_key(key, now, why, sink);
         }
         self.frame.clear();
     }
@@ -512,8 +622,8 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             .remove_key(key, self.config.range, self.config.out_of_range);
     }
 
-    /// Strikes `key` now, or once its re-strike gap has passed.
-    fn strike(&mut self, key: u8, folded: bool, now: Instant) {
+    /// Strikes `key` now (`true`), or once its re-strike gap has passed (`false`).
+    fn strike(&mut self, key: u8, folded: bool, now: Instant) -> bool {
         let g = self.config.guard;
         let resting = self.fingers.phase(key) == RELEASING
             && g.enabled
@@ -524,12 +634,18 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             self.fingers.set_flag(key, FOLDED, folded);
             self.stats.restrikes_delayed += 1;
             self.due = self.due.min(now + Duration::from_micros(wait));
+            false
         } else {
             self.count_sounded(folded);
             self.press_now(key, now);
-            if let Some(hold) = g.max_hold {
-                self.due = self.due.min(now + hold);
+            let limit = g
+                .max_hold
+                .map_or(u32::MAX, Duration::as_micros)
+                .min(self.duty_cut_after(key).unwrap_or(u32::MAX));
+            if g.enabled && limit != u32::MAX {
+                self.due = self.due.min(now + Duration::from_micros(limit));
             }
+            true
         }
     }
 
@@ -542,6 +658,13 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     }
 
     fn press_now(&mut self, key: u8, now: Instant) {
+        if let Some(d) = self.config.guard.duty {
+            // The key cooled at the duty while it was up.
+            let up = self.fingers.age(key, now) as u64;
+            let cooled = up * d.max_on.as_micros() as u64 / d.window.as_micros().max(1) as u64;
+            let heat = (self.fingers.heat_ms(key) as u64 * 1000).saturating_sub(cooled);
+            self.fingers.set_heat_ms(key, heat / 1000);
+        }
         self.fingers.enter(key, DOWN, now);
         self.fingers.set_flag(key, FOLDED, false);
         if let Some(f) = self.config.layout.finger(key) {
@@ -585,6 +708,14 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     /// Releases `key` now if it is down.
     fn release_now(&mut self, key: u8, now: Instant) {
         if self.fingers.phase(key) == DOWN {
+            if let Some(d) = self.config.guard.duty {
+                // It heated at (1 − duty) while it was down; rounded up, to be safe.
+                let (on, window) = (d.max_on.as_micros() as u64, d.window.as_micros() as u64);
+                let down = self.fingers.age(key, now) as u64;
+                let added = down * window.saturating_sub(on) / window.max(1);
+                let heat = self.fingers.heat_ms(key) as u64 + added.div_ceil(1000);
+                self.fingers.set_heat_ms(key, heat);
+            }
             self.fingers.enter(key, RELEASING, now);
             if let Some(f) = self.config.layout.finger(key) {
                 self.frame.set(f.board, f.bit, false);
@@ -593,10 +724,15 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     }
 
     /// Releases `key` if down, and cancels a delayed strike: for resets and cuts.
-    fn cancel_key(&mut self, key: u8, now: Instant) {
+    fn cancel_key<S: NoteSink>(&mut self, key: u8, now: Instant, why: DropReason, sink: &mut S) {
         if self.fingers.phase(key) == PENDING {
             // It never struck: it keeps resting from its earlier release.
-            self.stats.dropped_cancelled += 1;
+            if why == DropReason::Stopped {
+                self.stats.dropped_stopped += 1;
+            } else {
+                self.stats.dropped_cancelled += 1;
+            }
+            sink.note(NoteEvent::WaitEnded { key, reason: why });
             self.fingers.set_phase(key, RELEASING);
         } else {
             self.release_now(key, now);

@@ -12,6 +12,8 @@
 //!   of which notes hold each key, and runs the safety guard ([`GuardConfig`]).
 //! - [`HeldNotes`]: where the interpreter records which notes are on ([`NoteTable`] on hosts,
 //!   [`NotePool`] on small MCUs).
+//! - [`NoteEvent`]: what became of each note (struck, waiting, joined, dropped and why),
+//!   handed to a [`NoteSink`] by the `*_with` methods as it is decided.
 //! - [`FingerBoards`]: the one output trait, implemented by real boards (`orch-boards`), the
 //!   virtual robot and the [`Recording`] test double.
 //!
@@ -39,18 +41,23 @@
 //! | part | bytes |
 //! |---|---|
 //! | the 61 keys' phase, 32-bit timestamp and velocity (the guard's memory) | 366 |
+//! | the 61 keys' heat for the duty limit (feature `duty-limit`, off on the ATmega16) | 122 (+6 padding) |
 //! | held notes, [`NotePool<32>`](NotePool) (for MCUs: 32 notes played or sustained at once, twice the power budget) | 97 |
 //! | held notes, [`NoteTable`] (the default: every channel of every note, played and sustained, exact under any load) | 512 |
-//! | configuration 48, counters 48, frame 16, decoder 28, clock and pedals 32 | ≈ 170 |
-//! | **`Interpreter<4, 61, NotePool<32>>`: the ATmega16 build** | **640** |
-//! | **[`Interpreter`] with [`NoteTable`]: the host's** | **1048** |
+//! | configuration 68, counters 64, frame 16, decoder 28, clock and pedals 32 | ≈ 200 |
+//! | **`Interpreter<4, 61, NotePool<32>>` without `duty-limit`: the ATmega16 build** | **672** |
+//! | **[`Interpreter`] with [`NoteTable`] and the duty limit: the host's** | **1208** |
 //!
 //! AVR has no padding, so the ATmega16 figure is a few bytes lower. The [`Decoder`] alone
 //! takes 28 bytes.
 //!
 //! ## Cargo features
 //!
-//! None: the crate is always `no_std` and allocation-free.
+//! The crate is always `no_std` and allocation-free.
+//!
+//! - `duty-limit` (default): the guard's per-key duty limit ([`DutyLimit`]), 2 bytes of RAM a
+//!   key. The ATmega16 firmware builds without it (its 1 KB of SRAM has no room); its hold
+//!   limit and watchdog still apply.
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -63,19 +70,21 @@ mod held;
 mod interpreter;
 mod keymap;
 mod message;
+mod outcome;
 mod output;
 mod recording;
 mod stats;
 mod time;
 mod values;
 
-pub use config::{Config, ConfigError, GuardConfig, MAX_LIMIT};
+pub use config::{Config, ConfigError, DutyLimit, GuardConfig, Overlap, MAX_LIMIT};
 pub use decoder::{Counters, Decoded, Decoder};
 pub use frame::{FingerFrame, FlushError};
 pub use held::{HeldNotes, NotePool, NoteTable};
 pub use interpreter::{Interpreter, KeyPhase, ACTIVE_SENSING_TIMEOUT};
 pub use keymap::{BoardSpan, Finger, KeyOf, KeyRange, Layout, OutOfRange};
 pub use message::Message;
+pub use outcome::{DropReason, Landing, NoteEvent, NoteSink};
 pub use output::{BoardId, FingerBoards};
 pub use recording::{Nack, Recording, Write};
 pub use stats::Stats;

@@ -26,7 +26,7 @@ fn the_defaults_are_the_specs() {
 
 #[test]
 fn a_repeated_note_releases_waits_the_gap_then_presses_again() {
-    let mut rig = Rig::thesis();
+    let mut rig = Rig::patient();
     rig.feed(&[0x90, 60, 100], ms(0));
     rig.feed(&[0x80, 60, 0], ms(10));
     rig.feed(&[0x90, 60, 100], ms(20)); // 10 ms after the release: too soon
@@ -43,7 +43,7 @@ fn a_repeated_note_releases_waits_the_gap_then_presses_again() {
 #[test]
 fn a_note_on_for_a_note_already_down_lifts_the_key_first() {
     // No Note-Off between: the key must still go up and rest, not stay down (smear).
-    let mut rig = Rig::thesis();
+    let mut rig = Rig::patient();
     rig.feed(&[0x90, 60, 100], ms(0));
     rig.feed(&[0x90, 60, 100], ms(100));
     rig.run_until(ms(500));
@@ -67,7 +67,7 @@ fn a_repeated_note_after_the_gap_strikes_at_once() {
 
 #[test]
 fn a_repeated_note_shorter_than_the_gap_still_sounds_after_it() {
-    let mut rig = Rig::thesis();
+    let mut rig = Rig::patient();
     rig.feed(&[0x90, 60, 100], ms(0));
     rig.feed(&[0x80, 60, 0], ms(10));
     rig.feed(&[0x90, 60, 100], ms(20));
@@ -88,7 +88,7 @@ fn a_repeated_note_shorter_than_the_gap_still_sounds_after_it() {
 #[test]
 fn many_fast_repeats_never_smear() {
     // A note hammered every 5 ms for 400 ms: every strike is separated by at least 60 ms up.
-    let mut rig = Rig::thesis();
+    let mut rig = Rig::patient();
     for i in 0..80u64 {
         let status = if i % 2 == 0 { 0x90 } else { 0x80 };
         rig.feed(&[status, 60, 100], ms(i * 5));
@@ -247,7 +247,7 @@ fn tick_fires_the_time_rules_without_input() {
 
 #[test]
 fn next_deadline_never_misses_a_timer_and_settles_to_none_when_idle() {
-    let mut rig = Rig::thesis();
+    let mut rig = Rig::patient();
     assert_eq!(rig.robot.next_deadline(), None, "idle from the start");
     rig.feed(&[0x90, 60, 100], ms(0));
     assert_eq!(rig.robot.next_deadline(), Some(ms(4_000)), "the watchdog");
@@ -291,13 +291,13 @@ fn next_deadline_never_misses_a_timer_and_settles_to_none_when_idle() {
 
 #[test]
 fn all_off_releases_everything_and_cancels_waiting_strikes() {
-    let mut rig = Rig::thesis();
+    let mut rig = Rig::patient();
     rig.feed(&[0x90, 60, 100, 62, 100, 0x95, 24, 100], ms(0));
     rig.feed(&[0x80, 60, 0, 0x90, 60, 100], ms(10)); // 60 now waits for its gap
     rig.all_off(ms(20));
     assert_eq!(rig.fingers_down(), 0);
     assert_eq!(rig.robot.keys_down(), 0);
-    assert_eq!(rig.robot.stats().dropped_cancelled, 1);
+    assert_eq!(rig.robot.stats().dropped_stopped, 1);
     // Afterwards everything plays again, respecting the gap from the all-off.
     rig.feed(&[0x90, 62, 100], ms(30));
     rig.run_until(ms(200));

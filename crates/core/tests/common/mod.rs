@@ -142,6 +142,14 @@ impl Rig<NoteTable> {
         Self::new(Config::THESIS)
     }
 
+    /// The thesis's robot with no late limit: every re-strike waits for its gap however long.
+    pub fn patient() -> Self {
+        Self::with_guard(GuardConfig {
+            late_limit: None,
+            ..GuardConfig::DEFAULT
+        })
+    }
+
     pub fn with_guard(guard: GuardConfig) -> Self {
         Self::new(Config {
             guard,
@@ -454,8 +462,14 @@ pub fn any_config() -> impl Strategy<Value = Config<4>> {
         any::<bool>(),
         prop_oneof![3 => Just(0xFFFFu16), 1 => any::<u16>()],
         guard(),
+        any::<bool>(),
     )
-        .prop_map(|(drop, sustain, mask, guard)| Config {
+        .prop_map(|(drop, sustain, mask, guard, hold)| Config {
+            overlap: if hold {
+                orch_core::Overlap::Hold
+            } else {
+                orch_core::Overlap::Restrike
+            },
             out_of_range: if drop {
                 orch_core::OutOfRange::Drop
             } else {
@@ -477,13 +491,23 @@ pub fn guard() -> impl Strategy<Value = GuardConfig> {
         prop_oneof![1 => Just(0u32), 3 => 1u32..100],
         0u32..40,
         prop::option::weighted(0.8, 100u32..5_000),
+        prop::option::weighted(0.5, 0u32..80),
+        prop::option::weighted(0.5, (1u32..300, 1u32..=100)),
     )
-        .prop_map(|(hold, keys, gap, press, watchdog)| GuardConfig {
-            enabled: true,
-            max_hold: hold.map(Duration::from_millis),
-            max_keys_down: keys,
-            restrike_gap: Duration::from_millis(gap),
-            min_press: Duration::from_millis(press),
-            watchdog: watchdog.map(Duration::from_millis),
-        })
+        .prop_map(
+            |(hold, keys, gap, press, watchdog, late, duty)| GuardConfig {
+                enabled: true,
+                max_hold: hold.map(Duration::from_millis),
+                max_keys_down: keys,
+                restrike_gap: Duration::from_millis(gap),
+                min_press: Duration::from_millis(press),
+                watchdog: watchdog.map(Duration::from_millis),
+                late_limit: late.map(Duration::from_millis),
+                // max_on = window × percent / 100.
+                duty: duty.map(|(window, percent)| orch_core::DutyLimit {
+                    window: Duration::from_millis(window),
+                    max_on: Duration::from_micros((window * 10 * percent).max(1)),
+                }),
+            },
+        )
 }

@@ -1,0 +1,145 @@
+//! What became of each note: the interpreter's account, one event at a time.
+//!
+//! Every Note-On (velocity above 0) the interpreter takes gets exactly one first event, at the
+//! moment it arrives: [`NoteEvent::Struck`], [`NoteEvent::Waiting`], [`NoteEvent::Joined`] or
+//! [`NoteEvent::Dropped`]. A note that waits gets exactly one more, later, naming its key:
+//! [`NoteEvent::WaitOver`] (it struck, late) or [`NoteEvent::WaitEnded`] (it never struck).
+//! At most one note waits on a key at a time, so the key tells which note a later event is
+//! about. Events are handed to a [`NoteSink`] as they happen; the interpreter keeps none, so
+//! this costs nothing on an MCU that passes `&mut ()`.
+
+use crate::values::{Channel, Note};
+
+/// Why a note did not play.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum DropReason {
+    /// On a channel the robot does not listen to.
+    Channel,
+    /// Outside the keys, with the drop policy (or no key of its pitch class).
+    Range,
+    /// Past the power budget (`max_keys_down`), or the store of held notes was full.
+    Power,
+    /// A re-strike that could not sound within the guard's `late_limit` of its arrival: the
+    /// key had not rested long enough.
+    TooFast,
+    /// Waiting for its re-strike, it was cancelled: a later note on the key took the strike
+    /// over, or a System Reset, the watchdog or the missing Active Sensing released everything.
+    Cancelled,
+    /// The performance was stopped ([`Interpreter::all_off`](crate::Interpreter::all_off))
+    /// before it could strike.
+    Stopped,
+}
+
+impl DropReason {
+    /// Every reason, in report order.
+    pub const ALL: [DropReason; 6] = [
+        DropReason::Channel,
+        DropReason::Range,
+        DropReason::Power,
+        DropReason::TooFast,
+        DropReason::Cancelled,
+        DropReason::Stopped,
+    ];
+
+    /// The reason's name in reports: `channel`, `range`, `power`, `too_fast`, `cancelled`,
+    /// `stopped`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            DropReason::Channel => "channel",
+            DropReason::Range => "range",
+            DropReason::Power => "power",
+            DropReason::TooFast => "too_fast",
+            DropReason::Cancelled => "cancelled",
+            DropReason::Stopped => "stopped",
+        }
+    }
+}
+
+/// Where a note landed: its key and how far it was folded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Landing {
+    /// The key, 0 = the lowest key.
+    pub key: u8,
+    /// Octaves it was moved by to reach a key (+ up, − down, 0 = its own key).
+    pub octaves: i8,
+}
+
+/// One thing the interpreter decided about a note.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum NoteEvent {
+    /// The note strikes its key now: the key goes down at the next flush.
+    Struck {
+        /// The note's channel.
+        channel: Channel,
+        /// The note.
+        note: Note,
+        /// Its key.
+        at: Landing,
+    },
+    /// The note's key must rest first (the re-strike gap): it strikes when the rest is over
+    /// ([`NoteEvent::WaitOver`]) unless it is cancelled ([`NoteEvent::WaitEnded`]).
+    Waiting {
+        /// The note's channel.
+        channel: Channel,
+        /// The note.
+        note: Note,
+        /// Its key.
+        at: Landing,
+    },
+    /// Another note holds the key already (down, or about to strike): this one sounds with
+    /// it and makes no strike of its own.
+    Joined {
+        /// The note's channel.
+        channel: Channel,
+        /// The note.
+        note: Note,
+        /// Its key.
+        at: Landing,
+        /// The key struck less than the guard's `min_press` ago, or is waiting to strike:
+        /// the note joined the strike itself (a doubling), not a key held from before.
+        with_strike: bool,
+    },
+    /// The note does not play.
+    Dropped {
+        /// The note's channel.
+        channel: Channel,
+        /// The note.
+        note: Note,
+        /// Its key, if it has one (not for [`DropReason::Channel`] and
+        /// [`DropReason::Range`]).
+        at: Option<Landing>,
+        /// Why.
+        reason: DropReason,
+    },
+    /// The note waiting on `key` struck now, after its rest.
+    WaitOver {
+        /// The key.
+        key: u8,
+    },
+    /// The note waiting on `key` will not strike.
+    WaitEnded {
+        /// The key.
+        key: u8,
+        /// Why: [`DropReason::Cancelled`] or [`DropReason::Stopped`].
+        reason: DropReason,
+    },
+}
+
+/// Takes the interpreter's [`NoteEvent`]s. `()` ignores them; any `FnMut(NoteEvent)` is a
+/// sink.
+pub trait NoteSink {
+    /// One event, as it happens.
+    fn note(&mut self, event: NoteEvent);
+}
+
+impl NoteSink for () {
+    #[inline(always)]
+    fn note(&mut self, _event: NoteEvent) {}
+}
+
+impl<F: FnMut(NoteEvent)> NoteSink for F {
+    #[inline]
+    fn note(&mut self, event: NoteEvent) {
+        self(event)
+    }
+}
