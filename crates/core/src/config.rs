@@ -275,9 +275,7 @@ impl<const B: usize> Config<B> {
                 return Err(ConfigError::DutyUnsupported);
             }
             if let Some(d) = g.duty {
-                if d.max_on == Duration::ZERO
-                    || d.max_on > d.window
-                    || d.max_on > DutyLimit::MAX_ON
+                if d.max_on == Duration::ZERO || d.max_on > d.window || d.max_on > DutyLimit::MAX_ON
                 {
                     return Err(ConfigError::BadDuty);
                 }

@@ -461,7 +461,8 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             drop(sink, None, DropReason::Channel);
             return;
         }
-        let Some(KeyOf { key, octaves }) = self.config.range.key_for(note, self.config.out_of_range)
+        let Some(KeyOf { key, octaves }) =
+            self.config.range.key_for(note, self.config.out_of_range)
         else {
             self.stats.dropped_range += 1;
             drop(sink, None, DropReason::Range);

@@ -32,7 +32,10 @@ fn the_host_interpreter_keeps_its_stated_size() {
     } else {
         1088
     };
-    assert!(size <= stated, "Interpreter is {size} bytes, stated {stated}");
+    assert!(
+        size <= stated,
+        "Interpreter is {size} bytes, stated {stated}"
+    );
 }
 
 #[test]

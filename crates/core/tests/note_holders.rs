@@ -4,7 +4,9 @@
 //! keys; System Reset (0xFF) releases everything; the channel mask drops notes.
 //! (The original released a key on any Note-Off, even while another note still held it.)
 //!
-//! Times are 100 ms apart or more so the guard's re-strike gap never interferes.
+//! Times are 100 ms apart or more so the guard's re-strike gap never interferes. Tests of a
+//! second note joining a key that is down use `overlap = hold`; `overlap_settings.rs` has the
+//! default, restrike.
 
 mod common;
 
@@ -13,7 +15,7 @@ use orch_core::{ChannelMask, Config, Message};
 
 #[test]
 fn two_channels_on_one_key_keep_it_down_until_both_let_go() {
-    let mut rig = Rig::thesis();
+    let mut rig = Rig::holding();
     rig.feed(&[0x90, 60, 100], ms(0));
     rig.feed(&[0x91, 60, 100], ms(100));
     assert!(rig.note_down(60));
@@ -39,7 +41,7 @@ fn the_order_of_release_does_not_matter() {
 fn a_note_folded_onto_a_held_key_keeps_it_down_until_both_are_released() {
     // 24 folds up to 36 (key 0), the same key as 36 itself.
     for (first, second) in [(24, 36), (36, 24), (12, 24), (127, 91), (0, 36)] {
-        let mut rig = Rig::thesis();
+        let mut rig = Rig::holding();
         rig.feed(&[0x90, first, 100], ms(0));
         rig.feed(&[0x90, second, 100], ms(100));
         rig.feed(&[0x80, first, 0], ms(200));
@@ -156,7 +158,7 @@ fn system_reset_inside_a_message_releases_first_and_the_message_still_plays() {
 
 #[test]
 fn decoded_messages_can_be_handed_in_directly() {
-    let mut rig = Rig::thesis();
+    let mut rig = Rig::holding();
     rig.handle(note_on(0, 60, 100), ms(0));
     rig.handle(note_on(1, 60, 100), ms(100));
     rig.handle(note_off(0, 60, 0), ms(200));
@@ -199,7 +201,7 @@ fn the_default_listens_to_all_16_channels() {
 /// the key.
 #[test]
 fn all_notes_off_on_another_channel_does_not_cut_a_short_delayed_strike() {
-    let mut rig = Rig::thesis();
+    let mut rig = Rig::patient();
     rig.feed(&[0x90, 60, 100], ms(0));
     rig.feed(&[0x80, 60, 0], ms(10));
     rig.feed(&[0x90, 60, 100], ms(20)); // waits for the gap: strikes at 70 ms

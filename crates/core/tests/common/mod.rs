@@ -142,6 +142,14 @@ impl Rig<NoteTable> {
         Self::new(Config::THESIS)
     }
 
+    /// The thesis's robot with `overlap = hold`: a second note on a key that is down joins it.
+    pub fn holding() -> Self {
+        Self::new(Config {
+            overlap: orch_core::Overlap::Hold,
+            ..Config::THESIS
+        })
+    }
+
     /// The thesis's robot with no late limit: every re-strike waits for its gap however long.
     pub fn patient() -> Self {
         Self::with_guard(GuardConfig {
