@@ -20,6 +20,8 @@ pub struct FingerBoardSet<I2C, const N: usize> {
     i2c: I2C,
     addresses: [u8; N],
     last: [Option<u16>; N],
+    /// Boards in use: the first `len` of the `N` slots.
+    len: usize,
 }
 
 impl<I2C: I2c, const N: usize> FingerBoardSet<I2C, N> {
@@ -30,14 +32,54 @@ impl<I2C: I2c, const N: usize> FingerBoardSet<I2C, N> {
             i2c,
             addresses,
             last: [None; N],
+            len: N,
         }
+    }
+
+    /// A set of up to `N` boards at these 7-bit addresses (board `i` is `addresses[i]`), for a
+    /// robot whose number of boards is known only at run time. `None` if there are more than
+    /// `N`. Does no bus traffic: call [`init`](Self::init) next.
+    pub fn with_boards(i2c: I2C, addresses: &[u8]) -> Option<Self> {
+        if addresses.len() > N {
+            return None;
+        }
+        let mut all = [0u8; N];
+        all[..addresses.len()].copy_from_slice(addresses);
+        Some(Self {
+            i2c,
+            addresses: all,
+            last: [None; N],
+            len: addresses.len(),
+        })
+    }
+
+    /// How many boards the set drives.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the set drives no board.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The bus, to look at.
+    pub fn bus(&self) -> &I2C {
+        &self.i2c
+    }
+
+    /// The bus, to use between board writes (set a simulated bus's time, say). A transaction
+    /// that changes a board's outputs behind the driver's back must be followed by
+    /// [`invalidate`](Self::invalidate).
+    pub fn bus_mut(&mut self) -> &mut I2C {
+        &mut self.i2c
     }
 
     /// Initialises every board in index order, each as [`Pca9555::init`](crate::Pca9555::init)
     /// does: outputs to 0 first, then all pins outputs. Stops at the first failure (that
     /// board and the ones after it keep their pins as inputs); safe to call again.
     pub fn init(&mut self) -> Result<(), Error<I2C::Error>> {
-        for index in 0..N {
+        for index in 0..self.len {
             self.init_index(index)?;
         }
         Ok(())
@@ -53,7 +95,7 @@ impl<I2C: I2c, const N: usize> FingerBoardSet<I2C, N> {
     /// fails. Returns the first error. For stopping: every finger up.
     pub fn release_all(&mut self) -> Result<(), Error<I2C::Error>> {
         let mut first = Ok(());
-        for i in 0..N {
+        for i in 0..self.len {
             if let Err(e) = self.write_index(i, 0) {
                 if first.is_ok() {
                     first = Err(e);
@@ -75,8 +117,8 @@ impl<I2C: I2c, const N: usize> FingerBoardSet<I2C, N> {
     }
 
     /// The boards' addresses, by index.
-    pub fn addresses(&self) -> &[u8; N] {
-        &self.addresses
+    pub fn addresses(&self) -> &[u8] {
+        &self.addresses[..self.len]
     }
 
     /// Gives the bus back. Does no bus traffic.
@@ -86,7 +128,7 @@ impl<I2C: I2c, const N: usize> FingerBoardSet<I2C, N> {
 
     fn slot(&self, index: u8) -> Result<usize, Error<I2C::Error>> {
         let i = usize::from(index);
-        if i < N {
+        if i < self.len {
             Ok(i)
         } else {
             Err(Error::UnknownBoard(index))

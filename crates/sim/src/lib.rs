@@ -48,7 +48,7 @@ pub mod robot;
 
 pub use bus::{BusClock, BusError, BusStats, BusWrite, PinChange, SimTime, VirtualBus};
 pub use mechanics::{
-    KeyMechanics, Mechanics, MechanicsConfig, MechanicsStats, SoundEvent, SoundKind,
+    KeyMechanics, Mechanics, MechanicsConfig, MechanicsStats, Press, SoundEvent, SoundKind,
 };
 pub use pca9555::Pca9555;
 pub use recorder::{Performance, PinEdge, Recorder, Summary};

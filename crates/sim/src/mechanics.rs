@@ -125,6 +125,22 @@ pub struct SoundEvent {
     pub smeared: bool,
 }
 
+/// One press of a key (the pin high, then low), and what it gave: decided when the pin goes
+/// low (or at [`Mechanics::finish`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+pub struct Press {
+    /// Key index, 0 = lowest key.
+    pub key: u8,
+    /// When the pin went high.
+    pub pin_high: SimTime,
+    /// When the pin went low.
+    pub pin_low: SimTime,
+    /// When it sounded, if it did (held at least `min_hold`).
+    pub sounded: Option<SimTime>,
+    /// It began before the key had fully returned (rule 4).
+    pub smeared: bool,
+}
+
 /// What the mechanics counted.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
 pub struct MechanicsStats {
@@ -165,6 +181,7 @@ pub struct Mechanics {
     state: Vec<KeyState>,
     last_down: Vec<SimTime>,
     events: Vec<SoundEvent>,
+    presses: Vec<Press>,
     stats: MechanicsStats,
 }
 
@@ -176,6 +193,7 @@ impl Mechanics {
             state: vec![KeyState::Up; keys],
             last_down: vec![SimTime::ZERO; keys],
             events: Vec::new(),
+            presses: Vec::new(),
             stats: MechanicsStats::default(),
         }
     }
@@ -199,6 +217,16 @@ impl Mechanics {
     /// [`finish`](Self::finish) sorts them).
     pub fn events(&self) -> &[SoundEvent] {
         &self.events
+    }
+
+    /// Every press decided so far, in the order the pins went low (per key: in press order).
+    pub fn presses(&self) -> &[Press] {
+        &self.presses
+    }
+
+    /// Takes the presses decided so far out of the mechanics.
+    pub fn take_presses(&mut self) -> Vec<Press> {
+        core::mem::take(&mut self.presses)
     }
 
     /// Whether `key`'s pin is high.
@@ -261,8 +289,16 @@ impl Mechanics {
                 },
                 false,
             ) => {
+                let sounds = time.nanos_since(since) >= figures.min_hold.as_micros() as u64 * 1_000;
+                self.presses.push(Press {
+                    key,
+                    pin_high: since,
+                    pin_low: time,
+                    sounded: sounds.then(|| since + figures.press_delay),
+                    smeared,
+                });
                 let sounding =
-                    if time.nanos_since(since) >= figures.min_hold.as_micros() as u64 * 1_000 {
+                    if sounds {
                         let down = since + figures.press_delay;
                         self.emit(down, key, SoundKind::Down, smeared);
                         if smeared {

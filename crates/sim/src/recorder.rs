@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 use serde::Serialize;
 
 use crate::bus::{BusStats, BusWrite, SimTime};
-use crate::mechanics::{MechanicsStats, SoundEvent, SoundKind};
+use crate::mechanics::{MechanicsStats, SoundEvent, SoundKind, Press};
 
 /// A driven pin of a board changed level (at the completion of the write that changed it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
@@ -55,6 +55,8 @@ pub struct Performance {
     pub edges: Vec<PinEdge>,
     /// Every key-down and key-up.
     pub sounds: Vec<SoundEvent>,
+    /// Every press and what it gave, in the order the pins went low.
+    pub presses: Vec<Press>,
     /// The figures.
     pub summary: Summary,
 }
@@ -164,6 +166,7 @@ impl Recorder {
         self,
         end: SimTime,
         sounds: Vec<SoundEvent>,
+        presses: Vec<Press>,
         bus: BusStats,
         mechanics: MechanicsStats,
     ) -> Performance {
@@ -178,6 +181,7 @@ impl Recorder {
             writes: self.writes,
             edges: self.edges,
             sounds,
+            presses,
             summary,
         }
     }

@@ -202,14 +202,39 @@ impl VirtualRobot {
         self.sync();
         let end = end.into().max(self.bus.free_at());
         let sounds = self.mechanics.finish(end);
-        self.recorder
-            .finish(end, sounds, self.bus.stats(), self.mechanics.stats())
+        let presses = self.mechanics.take_presses();
+        self.recorder.finish(
+            end,
+            sounds,
+            presses,
+            self.bus.stats(),
+            self.mechanics.stats(),
+        )
     }
 }
 
 impl Default for VirtualRobot {
     fn default() -> Self {
         Self::thesis()
+    }
+}
+
+/// The robot is also the bus its boards hang on, so a board driver (`orch-boards`) can own it:
+/// each transaction goes to [`VirtualRobot::bus_mut`] and the robot syncs its mechanics and
+/// recorder after it.
+impl embedded_hal::i2c::ErrorType for VirtualRobot {
+    type Error = BusError;
+}
+
+impl I2c for VirtualRobot {
+    fn transaction(
+        &mut self,
+        address: u8,
+        operations: &mut [embedded_hal::i2c::Operation<'_>],
+    ) -> Result<(), BusError> {
+        let result = self.bus.transaction(address, operations);
+        self.sync();
+        result
     }
 }
 

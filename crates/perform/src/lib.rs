@@ -1,0 +1,101 @@
+//! # orch-perform: the performer
+//!
+//! One streaming pipeline from a score to a robot, with an honest account of every note.
+//! Every front end (`orch play`, `orch analyze`, later a daemon or the conductor) uses it.
+//!
+//! - **Source**: score events in order ([`ScoreEvent`]), from a song ([`song_events`]) or,
+//!   later, live MIDI.
+//! - **Planner** ([`Planner`], [`plan`]): plans in score time with a bounded lookahead;
+//!   sends each key's press early by its mechanical delay and each release early where a
+//!   re-strike needs its rest; reasons about notes, not only keys; the tempo can change at
+//!   any moment ([`TimeMap`], [`Control::set_tempo`]).
+//! - **Robot side**: a local robot ([`LocalRobot`]: `orch-core`'s interpreter and any
+//!   finger boards; [`SimBoards`] is the virtual robot behind `orch-boards`' real driver), or
+//!   a MIDI byte output ([`MidiOut`]) for a robot that interprets MIDI itself, with the
+//!   virtual robot as its copy at the far end of the [`Link`] (a DIN line takes 320 µs a
+//!   byte, and compensation counts it).
+//! - **The account** ([`Ledger`], [`Outcome`], [`Report`]): the interpreter says whether
+//!   each note struck, joined or was dropped and why; the virtual robot says when each strike
+//!   sounded. Every note gets exactly one outcome; they add up.
+//! - **Real time** ([`realtime`]): the sender on its own thread at real-time priority where
+//!   the OS allows it, with a precise sleep, lateness measured per message sent.
+//!
+//! ```
+//! use orch_perform::{perform, song_events, Link, Setup, Tempo};
+//! use orch_seq::{Song, VirtualClock};
+//!
+//! // Middle C for a quarter note at 120 bpm.
+//! let smf = [
+//!     b'M', b'T', b'h', b'd', 0, 0, 0, 6, 0, 0, 0, 1, 0x01, 0xE0,
+//!     b'M', b'T', b'r', b'k', 0, 0, 0, 12,
+//!     0x00, 0x90, 60, 100, 0x83, 0x60, 60, 0, 0x00, 0xFF, 0x2F, 0x00,
+//! ];
+//! let song = Song::parse(&smf).unwrap();
+//! let setup = Setup {
+//!     config: orch_perform::thesis_config(),
+//!     sim: orch_sim::SimConfig::thesis(),
+//!     compensation: true,
+//!     tempo: Tempo::NORMAL,
+//!     link: Link::Direct,
+//! };
+//! let played = perform::<_, orch_perform::MidiRecording>(
+//!     &setup, song_events(&song), song.notes(), None, &mut VirtualClock::new(), None, None,
+//! ).unwrap();
+//! let report = played.report(None);
+//! assert_eq!(report.outcomes.on_time, 1);
+//! assert!(report.adds_up());
+//! ```
+//!
+//! ## Cargo features
+//!
+//! None.
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod ledger;
+pub mod link;
+pub mod plan;
+pub mod performer;
+pub mod realtime;
+pub mod report;
+pub mod robot;
+pub mod tempo;
+
+pub use ledger::{Ledger, NoteRecord, Outcome, ON_TIME_US};
+pub use link::{DinWire, Link, MidiOut, MidiRecording, RunningStatus};
+pub use performer::{perform, Control, Live, PerformError, Played, Setup, KEEP_ALIVE_US};
+pub use plan::{KeyMap, NoteId, PlanRules, PlanStats, Planned, Planner, ScoreEvent};
+pub use report::{Bus, Dropped, Outcomes, Planning, Report, Spread};
+pub use robot::{
+    sim_boards, Boards, Decided, HostInterpreter, LocalRobot, RobotError, SimBoards, MAX_BOARDS,
+    MAX_KEYS,
+};
+pub use tempo::{Tempo, TimeMap};
+
+/// The score events of a song, in order.
+pub fn song_events(song: &orch_seq::Song) -> impl Iterator<Item = ScoreEvent> + '_ {
+    song.events().iter().map(|e| ScoreEvent {
+        score_us: e.time_us,
+        bytes: e.bytes.clone(),
+    })
+}
+
+/// The thesis's robot with orch's guard, for a host ([`MAX_BOARDS`] boards of room).
+pub fn thesis_config() -> orch_core::Config<MAX_BOARDS> {
+    let t = orch_core::Config::THESIS;
+    let mut boards = [orch_core::BoardSpan {
+        address: 0,
+        keys: 0,
+        first_bit: 0,
+    }; MAX_BOARDS];
+    boards[..4].copy_from_slice(&t.layout.boards);
+    orch_core::Config {
+        channels: t.channels,
+        range: t.range,
+        out_of_range: t.out_of_range,
+        layout: orch_core::Layout { boards },
+        sustain: t.sustain,
+        overlap: t.overlap,
+        guard: t.guard,
+    }
+}

@@ -1,0 +1,478 @@
+//! The performer: the planner's sends, paced by a clock, to the robot; the account at the end.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+
+use orch_core::{Config, Stats};
+use orch_seq::Clock;
+use orch_sim::{Performance, SimConfig, SoundKind};
+
+use crate::ledger::{Ledger, NoteRecord, Outcome};
+use crate::link::{DinWire, Link, MidiOut, RunningStatus};
+use crate::plan::{PlanRules, PlanStats, Planned, Planner, ScoreEvent};
+use crate::report::{Bus, Outcomes, Report, Spread};
+use crate::robot::{sim_boards, LocalRobot, SimBoards, MAX_BOARDS};
+use crate::tempo::Tempo;
+
+/// The longest the performer leaves a line silent: it sends Active Sensing (0xFE) after
+/// 200 ms without a byte, so the robot's watchdog fires only when the sender is really gone.
+pub const KEEP_ALIVE_US: u64 = 200_000;
+
+/// How a performance is set up.
+#[derive(Clone, Debug)]
+pub struct Setup {
+    /// The interpreter's configuration (the robot's keys, boards and guard).
+    pub config: Config<MAX_BOARDS>,
+    /// The virtual robot: boards, bus clock, mechanics.
+    pub sim: SimConfig,
+    /// Send each key early by its delays.
+    pub compensation: bool,
+    /// The tempo to start at.
+    pub tempo: Tempo,
+    /// How the bytes reach the robot.
+    pub link: Link,
+}
+
+impl Setup {
+    /// One board write on the bus, µs (START, 4 bytes of 9 bits, STOP), rounded up.
+    pub fn write_us(&self) -> u64 {
+        self.sim.clock.nanos_for_bits(38).div_ceil(1000)
+    }
+
+    /// The planner's rules for this robot: each key's press lead is its press delay, one
+    /// board write and the link's time; its release lead, its release delay and one write.
+    pub fn rules(&self) -> PlanRules {
+        let c = &self.config;
+        let keys = c.range.keys();
+        let write = self.write_us() + self.link.note_lead_us();
+        let m = &self.sim.mechanics;
+        let guard = c.guard.enabled;
+        PlanRules {
+            keys: crate::plan::KeyMap {
+                channels: c.channels,
+                range: c.range,
+                out_of_range: c.out_of_range,
+            },
+            press_lead_us: (0..keys)
+                .map(|k| m.for_key(k as u8).press_delay.as_micros() as u64 + write)
+                .collect(),
+            release_lead_us: (0..keys)
+                .map(|k| m.for_key(k as u8).release_delay.as_micros() as u64 + write)
+                .collect(),
+            // The shortest press that sounds, plus the longest a write can queue on the bus
+            // behind the other boards' (the press may reach its pin later than the release).
+            min_hold_us: (0..keys)
+                .map(|k| {
+                    m.for_key(k as u8).min_hold.as_micros() as u64
+                        + self.sim.boards.len() as u64 * self.write_us()
+                })
+                .collect(),
+            restrike_gap_us: if guard {
+                c.guard.restrike_gap.as_micros() as u64
+            } else {
+                0
+            },
+            min_press_us: if guard {
+                c.guard.min_press.as_micros() as u64
+            } else {
+                0
+            },
+            late_limit_us: c
+                .guard
+                .late_limit
+                .filter(|_| guard)
+                .map(|d| d.as_micros() as u64),
+            overlap: c.overlap,
+            compensation: self.compensation,
+            bus_margin_us: self.sim.boards.len() as u64 * self.write_us(),
+        }
+    }
+}
+
+/// Steering a performance from another thread: stop it, change its tempo.
+#[derive(Debug, Default)]
+pub struct Control {
+    stop: AtomicBool,
+    tempo: Mutex<Option<Tempo>>,
+}
+
+impl Control {
+    /// A control with nothing asked.
+    pub fn new() -> Arc<Self> {
+        Arc::new(Self::default())
+    }
+
+    /// Stop as soon as possible: every key released, the rest of the song stopped.
+    pub fn stop(&self) {
+        self.stop.store(true, Ordering::SeqCst);
+    }
+
+    /// Whether a stop was asked.
+    pub fn stopping(&self) -> bool {
+        self.stop.load(Ordering::SeqCst)
+    }
+
+    /// Play at `tempo` from now on.
+    pub fn set_tempo(&self, tempo: Tempo) {
+        *self.tempo.lock().unwrap_or_else(|e| e.into_inner()) = Some(tempo);
+    }
+
+    fn tempo_pending(&self) -> bool {
+        self.tempo
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .is_some()
+    }
+
+    fn take_tempo(&self) -> Option<Tempo> {
+        self.tempo.lock().unwrap_or_else(|e| e.into_inner()).take()
+    }
+}
+
+/// Where a performance stands, for a live view.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Live {
+    /// Where the song is, µs of score time.
+    pub song_us: u64,
+    /// Whether each key of the virtual robot is down.
+    pub keys_down: Vec<bool>,
+    /// Score notes sent so far.
+    pub notes_sent: u64,
+    /// The tempo factor.
+    pub tempo: f64,
+}
+
+/// What went wrong in a performance.
+#[derive(Debug)]
+pub enum PerformError {
+    /// The robot's configuration cannot run, or the virtual robot failed.
+    Robot(String),
+    /// The MIDI output failed.
+    Midi(Box<dyn std::error::Error + Send + Sync>),
+}
+
+impl std::fmt::Display for PerformError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PerformError::Robot(e) => write!(f, "the robot: {e}"),
+            PerformError::Midi(e) => write!(f, "the MIDI output: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for PerformError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            PerformError::Midi(e) => Some(&**e),
+            PerformError::Robot(_) => None,
+        }
+    }
+}
+
+fn robot_err(e: impl std::fmt::Display) -> PerformError {
+    PerformError::Robot(e.to_string())
+}
+
+/// A finished performance: every note's record and what the virtual robot did.
+#[derive(Debug)]
+pub struct Played {
+    /// Every score note, in score order, with its outcome.
+    pub records: Vec<NoteRecord>,
+    /// What the virtual robot did: writes, edges, sounds, presses.
+    pub performance: Performance,
+    /// The interpreter's counters.
+    pub stats: Stats,
+    /// What the planner changed.
+    pub plan: PlanStats,
+    /// Real-clock lateness of each message sent, µs (real-time play only).
+    pub lateness_us: Option<Vec<u64>>,
+    /// When the song started (score time 0), wall µs.
+    pub start_us: u64,
+    /// When the robot had finished, wall µs.
+    pub end_us: u64,
+    /// Re-strikes that waited for their key's rest.
+    pub restrikes_waited: u64,
+    /// Whether it was stopped before the end.
+    pub stopped: bool,
+}
+
+impl Played {
+    /// The report, with `uncompensated` (the onset error of the same piece played without
+    /// compensation) beside it if given.
+    pub fn report(&self, uncompensated: Option<Spread>) -> Report {
+        let (outcomes, unmatched) = Outcomes::of(&self.records);
+        let mut folded_by_octaves = std::collections::BTreeMap::new();
+        for r in &self.records {
+            if let Some(l) = r.landing.filter(|l| l.octaves != 0) {
+                *folded_by_octaves.entry(l.octaves).or_insert(0) += 1;
+            }
+        }
+        let m = self.performance.summary.mechanics;
+        let bus = self.performance.summary.bus;
+        let span = self.end_us.saturating_sub(self.start_us).max(1) as f64;
+        let s = &self.stats;
+        Report {
+            notes: self.records.len() as u64,
+            outcomes,
+            strikes: self
+                .performance
+                .sounds
+                .iter()
+                .filter(|e| e.kind == SoundKind::Down)
+                .count() as u64,
+            unmatched,
+            folded: folded_by_octaves.values().sum(),
+            folded_by_octaves,
+            restrikes_delayed: self.restrikes_waited,
+            planning: self.plan.into(),
+            cut_by_hold_limit: s.cut_by_hold_limit.into(),
+            cut_by_duty_limit: s.cut_by_duty_limit.into(),
+            cut_by_watchdog: s.cut_by_watchdog.into(),
+            onset_ms: Spread::of_onsets(&self.records),
+            onset_uncompensated_ms: uncompensated,
+            peak_keys_down: s.peak_keys_down,
+            too_short_to_sound: m.short_pulses,
+            smeared: m.smeared_presses,
+            bus: Bus {
+                writes: bus.transactions,
+                bytes: bus.bytes,
+                busy_percent: (bus.busy_nanos as f64 / 1000.0 / span * 100_000.0).round()
+                    / 1000.0,
+            },
+            seconds: (span / 1e4).round() / 100.0,
+            lateness_ms: self.lateness_us.as_ref().map(|l| {
+                let mut ms: Vec<f64> = l.iter().map(|&u| u as f64 / 1000.0).collect();
+                Spread::of(&mut ms)
+            }),
+        }
+    }
+
+    /// The notes that went wrong, the worst first: dropped, struck without a sound, joined,
+    /// then late and early by how much.
+    pub fn went_wrong(&self) -> Vec<&NoteRecord> {
+        let rank = |r: &NoteRecord| -> (u8, i64) {
+            match r.outcome {
+                Outcome::Dropped(_) => (0, 0),
+                Outcome::Unmatched => (1, 0),
+                Outcome::Joined => (2, 0),
+                Outcome::Late { by_ms } | Outcome::Early { by_ms } => (3, -(by_ms * 1000.0) as i64),
+                _ => (9, 0),
+            }
+        };
+        let mut v: Vec<&NoteRecord> = self
+            .records
+            .iter()
+            .filter(|r| rank(r).0 < 9)
+            .collect();
+        v.sort_by_key(|r| (rank(r), r.score_at_us));
+        v
+    }
+}
+
+/// Where the bytes go.
+enum Out<'m, M: MidiOut> {
+    Virtual,
+    Midi {
+        out: &'m mut M,
+        wire: DinWire,
+        status: RunningStatus,
+    },
+}
+
+/// Plays `source` (score events in order, `notes` Note-Ons in all) as `setup` says. With a
+/// `midi` output the bytes go out there, and the virtual robot is its copy at the far end of
+/// `setup.link`; without, the virtual robot is the robot. `clock` paces the sends (a
+/// `VirtualClock` renders as fast as the machine goes); with `live`, the performer wakes at
+/// least every 40 ms to call it with where it stands and to look at `control`.
+pub fn perform<S, M>(
+    setup: &Setup,
+    source: S,
+    notes: usize,
+    midi: Option<&mut M>,
+    clock: &mut dyn Clock,
+    control: Option<&Control>,
+    mut live: Option<&mut dyn FnMut(&Live)>,
+) -> Result<Played, PerformError>
+where
+    S: Iterator<Item = ScoreEvent>,
+    M: MidiOut,
+{
+    let boards = sim_boards(&setup.sim).map_err(robot_err)?;
+    let mut robot = LocalRobot::<SimBoards>::new(setup.config, boards).map_err(robot_err)?;
+    // Start once the boards are configured, on a whole millisecond.
+    let ready = robot
+        .boards()
+        .bus()
+        .bus()
+        .free_at()
+        .as_micros()
+        .div_ceil(1000)
+        * 1000;
+    let mut planner = Planner::new(source, setup.rules(), ready as i64, setup.tempo);
+    let start = planner.wall(0).max(0) as u64;
+    let mut ledger = Ledger::new(setup.config.range.keys());
+    let mut out = match midi {
+        Some(out) => Out::Midi {
+            out,
+            wire: DinWire::default(),
+            status: RunningStatus::default(),
+        },
+        None => Out::Virtual,
+    };
+    let real = live.is_some();
+    let mut lateness = real.then(Vec::new);
+    let mut last_byte: Option<u64> = None;
+    let mut notes_sent = 0u64;
+    let mut stopped_at = None;
+    let mut last_at = ready;
+
+    loop {
+        if let Some(c) = control {
+            if let Some(t) = c.take_tempo() {
+                planner.set_tempo(clock.now_us() as i64, t);
+            }
+        }
+        let Some(next) = planner.peek_time() else { break };
+        let next = next.max(0) as u64;
+        // Keep the line alive through long silences (generated as the time comes, never
+        // stored: memory follows the events, not the length of a silence).
+        let due = match last_byte {
+            Some(b) if next > b + KEEP_ALIVE_US => (b + KEEP_ALIVE_US, true),
+            _ => (next, false),
+        };
+        if let Some(l) = live.as_deref_mut() {
+            // Wake at least every 40 ms to show where the song is and to look at `control`.
+            let mut stop = false;
+            loop {
+                let now = clock.now_us();
+                if control.is_some_and(Control::stopping) {
+                    stop = true;
+                    break;
+                }
+                if now >= due.0 {
+                    break;
+                }
+                let step = due.0.min(now + 40_000);
+                clock.wait_until(step);
+                l(&Live {
+                    song_us: planner.time_map().score(step as i64),
+                    keys_down: robot.keys_down(),
+                    notes_sent,
+                    tempo: planner.time_map().tempo().get(),
+                });
+                if control.is_some_and(|c| c.tempo_pending()) {
+                    break;
+                }
+            }
+            if stop {
+                stopped_at = Some(clock.now_us().max(last_at));
+                break;
+            }
+        } else {
+            clock.wait_until(due.0);
+        }
+        if due.1 {
+            deliver(&mut out, setup.link, due.0, &[0xFE], None, &mut robot, &mut ledger)?;
+            last_byte = Some(due.0);
+            continue;
+        }
+        let Some(p) = planner.next_planned() else { break };
+        match p {
+            Planned::Send { bytes, note, score_at_us, .. } => {
+                if let (Some(id), Some((ch, n, _))) = (note, bytes.note_on()) {
+                    ledger.score(id, ch, n, score_at_us);
+                    notes_sent += 1;
+                }
+                let t = next.max(last_at);
+                deliver(&mut out, setup.link, t, &bytes, note, &mut robot, &mut ledger)?;
+                if let Some(l) = lateness.as_mut() {
+                    l.push(clock.now_us().saturating_sub(t));
+                }
+                last_at = t;
+                last_byte = Some(t);
+            }
+            Planned::Dropped {
+                score_at_us,
+                channel,
+                note_number,
+                note,
+                reason,
+            } => {
+                ledger.score(note, channel, note_number, score_at_us);
+                ledger.dropped(note, reason);
+            }
+        }
+    }
+    // A robot that interprets MIDI itself is told to let go of everything, on every channel.
+    if let Out::Midi { .. } = out {
+        let t = stopped_at.unwrap_or(last_at).max(last_at);
+        for ch in 0..16u8 {
+            deliver(&mut out, setup.link, t, &[0xB0 | ch, 123, 0], None, &mut robot, &mut ledger)?;
+        }
+        last_at = t;
+    }
+    let wire_end = match &out {
+        Out::Midi { wire, .. } => wire.free_at(),
+        Out::Virtual => 0,
+    };
+    let drained = match stopped_at {
+        Some(t) => robot.stop(t.max(wire_end)).map_err(robot_err)?,
+        None => robot.drain(last_at.max(wire_end) + 1).map_err(robot_err)?,
+    };
+    for d in robot.take_decided() {
+        ledger.decided(d.t_us, d.event);
+    }
+    let longest_release = (0..setup.config.range.keys())
+        .map(|k| setup.sim.mechanics.for_key(k as u8).release_delay.as_micros() as u64)
+        .max()
+        .unwrap_or(0);
+    let end = drained + longest_release + 1_000;
+    let restrikes_waited = ledger.restrikes_waited();
+    let (interp, performance) = robot.finish(end);
+    let records = ledger.close(&performance.presses, notes);
+    Ok(Played {
+        records,
+        performance,
+        stats: *interp.stats(),
+        plan: planner.stats(),
+        lateness_us: lateness,
+        start_us: start,
+        end_us: end,
+        restrikes_waited,
+        stopped: stopped_at.is_some(),
+    })
+}
+
+/// Hands one message to the robot side at `t`.
+fn deliver<M: MidiOut>(
+    out: &mut Out<'_, M>,
+    link: Link,
+    t: u64,
+    bytes: &[u8],
+    note: Option<u32>,
+    robot: &mut LocalRobot<SimBoards>,
+    ledger: &mut Ledger,
+) -> Result<(), PerformError> {
+    if let Some(id) = note {
+        ledger.delivered(id);
+    }
+    match out {
+        Out::Virtual => robot.feed(t, bytes).map_err(robot_err)?,
+        Out::Midi { out, wire, status } => {
+            let sent = status.compress(bytes);
+            out.send(t, sent)
+                .map_err(|e| PerformError::Midi(Box::new(e)))?;
+            for &b in sent {
+                let at = match link {
+                    Link::Din => wire.arrivals(t, 1).next().unwrap_or(t),
+                    Link::Direct => t,
+                };
+                robot.feed(at, &[b]).map_err(robot_err)?;
+            }
+        }
+    }
+    for d in robot.take_decided() {
+        ledger.decided(d.t_us, d.event);
+    }
+    Ok(())
+}

@@ -1,0 +1,677 @@
+//! The streaming planner: score events in, timed sends out, each key early by its own delay.
+//!
+//! The planner reads the score as a stream and plans in score time with a bounded lookahead.
+//! It keeps a queue of planned sends; a send leaves the queue only once nothing still unread
+//! could change it: every send it plans for an event is at least [`Planner::lookahead_us`]
+//! before that event's wall time, so once the next unread event is further away than that
+//! from the head of the queue, the head is final. At a constant tempo the sends are therefore
+//! exactly those of planning the whole song first ([`Planner::eager`]), and the tempo can
+//! change at any moment ([`Planner::set_tempo`]) without planning the song again.
+//!
+//! # Rules
+//!
+//! The planner keeps a model of every key, mirroring the interpreter in `orch-core`: which
+//! (channel, note) pairs hold it, when it struck, when it was let go.
+//!
+//! 1. **Compensation.** A Note-On is sent early by its key's press lead (the key's press delay
+//!    and what the link to the robot adds); the Note-Off that lets a key go, by its release
+//!    lead. With compensation off every message goes at its score time and nothing below
+//!    applies.
+//! 2. **One key's messages keep their order**: a message is never sent before an earlier one
+//!    of the same key (equal times keep score order).
+//! 3. **Notes, not only keys.** A Note-On on a key that is down joins it, with no strike and
+//!    no constraint, when it is a unison (the key's strike has the same score time) or when
+//!    `overlap = hold` and its own (channel, note) is not already on. Otherwise it is a
+//!    re-strike: the planner sends Note-Offs for the key's holders early, `restrike_gap`
+//!    before the new press, so the key lifts, rests and strikes on time. (The later Note-Offs
+//!    of those notes in the score reach the robot as no-ops.)
+//! 4. **The rest before a re-strike.** A press comes at least `restrike_gap` after the key's
+//!    release: if it would come sooner, the release still waiting in the queue is **moved
+//!    earlier**, but never before the key's previous message nor before its strike plus
+//!    `min(min_press, the note's length)` (a late strike: its strike plus `min_press`).
+//!    No press is let go before the key's shortest press that sounds (`min_hold`), however
+//!    short its note: a 4 ms grace note still sounds.
+//! 5. **Bounded lateness.** When a press cannot strike within `late_limit` of its score time
+//!    even so, nothing is moved for it: if the robot can see it (the key still resting when
+//!    the press arrives) the press is sent and the interpreter drops it as too fast; if only
+//!    the planner can (the press had to wait behind the key's earlier messages), the planner
+//!    drops it itself, as [`Planned::Dropped`] with [`DropReason::TooFast`].
+//! 6. **Channel-wide controllers** (sustain 64, sostenuto 66, 120, 121, 123–127) keep their
+//!    place among their channel's note messages: sent no earlier than the note messages
+//!    before them in the score and, where that allows, no later than those after them.
+
+use std::collections::BTreeMap;
+
+use orch_core::{Channel, ChannelMask, DropReason, KeyRange, Landing, Note, OutOfRange, Overlap};
+use orch_seq::WireBytes;
+
+use crate::tempo::{Tempo, TimeMap};
+
+/// A score note: the index of its Note-On among the score's Note-Ons.
+pub type NoteId = u32;
+
+/// One message of the score.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ScoreEvent {
+    /// Its time in the song, µs at the written tempo.
+    pub score_us: u64,
+    /// The message.
+    pub bytes: WireBytes,
+}
+
+/// Where notes land: the interpreter's channels, key range and fold policy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct KeyMap {
+    /// Channels listened to.
+    pub channels: ChannelMask,
+    /// The keys.
+    pub range: KeyRange,
+    /// Notes outside the keys.
+    pub out_of_range: OutOfRange,
+}
+
+impl KeyMap {
+    /// The key of `note` on `channel` (0..=15), if the robot plays it.
+    pub fn land(&self, channel: u8, note: u8) -> Option<Landing> {
+        let ch = Channel::new(channel)?;
+        if !self.channels.contains(ch) {
+            return None;
+        }
+        let k = self.range.key_for(Note::new(note)?, self.out_of_range)?;
+        Some(Landing {
+            key: k.key,
+            octaves: k.octaves,
+        })
+    }
+}
+
+/// What the planner needs to know about the robot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlanRules {
+    /// Where notes land.
+    pub keys: KeyMap,
+    /// Per key: how early to send its press, µs (its press delay and the link's time).
+    pub press_lead_us: Vec<u64>,
+    /// Per key: how early to send its release, µs.
+    pub release_lead_us: Vec<u64>,
+    /// Per key: the shortest press that sounds, µs. A press is never let go sooner, however
+    /// short its note.
+    pub min_hold_us: Vec<u64>,
+    /// The guard's re-strike gap, µs (0 with the guard off).
+    pub restrike_gap_us: u64,
+    /// The guard's shortest strike, µs.
+    pub min_press_us: u64,
+    /// The guard's late limit, µs; `None` for none.
+    pub late_limit_us: Option<u64>,
+    /// What a second note on a key that is down does.
+    pub overlap: Overlap,
+    /// Send each key early by its lead (off: every message at its score time).
+    pub compensation: bool,
+    /// The longest a board write may queue on the bus behind the others', µs: kept free
+    /// within the late limit.
+    pub bus_margin_us: u64,
+}
+
+/// What the planner counted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PlanStats {
+    /// Releases moved earlier than their lead to give a re-strike its rest.
+    pub releases_moved_early: u64,
+    /// Note-Offs the planner added so a re-strike lands on time (rule 3).
+    pub early_releases_added: u64,
+    /// Presses sent later than their lead, behind the key's earlier messages.
+    pub presses_held_back: u64,
+    /// Notes the planner dropped as too fast (rule 5).
+    pub dropped_too_fast: u64,
+    /// Channel-wide controllers sent at other than their score time.
+    pub controllers_moved: u64,
+    /// The most sends waiting in the queue at once.
+    pub peak_queue: usize,
+}
+
+/// One planned send.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Planned {
+    /// Send `bytes` at wall time `at_us`.
+    Send {
+        /// Wall time, µs.
+        at_us: i64,
+        /// The message.
+        bytes: WireBytes,
+        /// The score note whose Note-On this is.
+        note: Option<NoteId>,
+        /// When the score wants it to act (to sound, for a Note-On), wall µs.
+        score_at_us: i64,
+        /// Added by the planner (rule 3), not in the score.
+        added: bool,
+    },
+    /// A score note the planner does not send.
+    Dropped {
+        /// Its wall time in the score.
+        score_at_us: i64,
+        /// Its channel (0..=15).
+        channel: u8,
+        /// Its note.
+        note_number: u8,
+        /// The note.
+        note: NoteId,
+        /// Why.
+        reason: DropReason,
+    },
+}
+
+impl Planned {
+    /// Its wall time: when to send it, or the score's time of a dropped note.
+    pub fn at_us(&self) -> i64 {
+        match self {
+            Planned::Send { at_us, .. } => *at_us,
+            Planned::Dropped { score_at_us, .. } => *score_at_us,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Strike {
+    /// When the score wants it, wall µs.
+    score_at: i64,
+    /// When the key is predicted to go down.
+    at: i64,
+    /// It waited for the key's rest.
+    late: bool,
+}
+
+#[derive(Clone, Debug, Default)]
+struct KeyModel {
+    holders: Vec<(u8, u8)>,
+    strike: Option<Strike>,
+    /// Send time of the key's latest planned message.
+    last_send: Option<i64>,
+    /// When the key was last let go (planned).
+    released_at: Option<i64>,
+    /// The queued message that lets the key go, and how early it may move.
+    release: Option<((i64, u64), i64)>,
+}
+
+type QueueKey = (i64, u64);
+
+/// The streaming planner. See the [module notes](self).
+#[derive(Debug)]
+pub struct Planner<S: Iterator<Item = ScoreEvent>> {
+    source: std::iter::Peekable<S>,
+    rules: PlanRules,
+    map: TimeMap,
+    lookahead: i64,
+    queue: BTreeMap<QueueKey, Planned>,
+    seq: u64,
+    keys: Vec<KeyModel>,
+    /// Per note number: the channels on which it is on (the interpreter's record, mirrored).
+    on: [u16; 128],
+    /// Per channel: the latest send of a mapped note message, and the last channel-wide
+    /// controller still movable (its queue key and its lower bound).
+    channel_last: [Option<i64>; 16],
+    channel_cc: [Option<(QueueKey, i64)>; 16],
+    next_note: NoteId,
+    eager: bool,
+    stats: PlanStats,
+}
+
+impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
+    /// A planner of `source` (in score order) for a robot as `rules` say, with score time 0
+    /// at wall time `start_us + lookahead` (so no send falls before `start_us`).
+    pub fn new(source: S, rules: PlanRules, start_us: i64, tempo: Tempo) -> Self {
+        let keys = rules.press_lead_us.len().max(rules.release_lead_us.len());
+        let lead = |v: &[u64]| v.iter().copied().max().unwrap_or(0);
+        let lookahead = if rules.compensation {
+            (lead(&rules.press_lead_us) + rules.restrike_gap_us).max(lead(&rules.release_lead_us))
+        } else {
+            0
+        } as i64;
+        Self {
+            source: source.peekable(),
+            map: TimeMap::new(start_us + lookahead, tempo),
+            lookahead,
+            rules,
+            queue: BTreeMap::new(),
+            seq: 0,
+            keys: vec![KeyModel::default(); keys],
+            on: [0; 128],
+            channel_last: [None; 16],
+            channel_cc: [None; 16],
+            next_note: 0,
+            eager: false,
+            stats: PlanStats::default(),
+        }
+    }
+
+    /// Plans the whole song before the first send leaves: the reference the streaming planner
+    /// must equal at a constant tempo.
+    pub fn eager(mut self) -> Self {
+        self.eager = true;
+        self
+    }
+
+    /// How far ahead of the present the planner reads the score, in wall µs: the longest
+    /// press lead plus the re-strike gap (or the longest release lead, if longer).
+    pub fn lookahead_us(&self) -> i64 {
+        self.lookahead
+    }
+
+    /// The score ↔ wall time map.
+    pub fn time_map(&self) -> &TimeMap {
+        &self.map
+    }
+
+    /// What the planner counted so far.
+    pub fn stats(&self) -> PlanStats {
+        self.stats
+    }
+
+    /// Score notes read so far.
+    pub fn notes_read(&self) -> u32 {
+        self.next_note
+    }
+
+    /// From wall time `now_us` on, play at `tempo`. Score time stays continuous; sends still
+    /// in the queue keep their offset from their own score time (so compensation stays
+    /// right), and never move before `now_us`.
+    pub fn set_tempo(&mut self, now_us: i64, tempo: Tempo) {
+        let old = self.map;
+        self.map.change(now_us, tempo);
+        let moved: Vec<(QueueKey, Planned)> = std::mem::take(&mut self.queue).into_iter().collect();
+        let shift = |t: i64, score_at: i64| -> i64 {
+            let score = old.score(score_at);
+            let new_at = self.map.wall(score);
+            (new_at - (score_at - t)).max(now_us)
+        };
+        let mut fixed = BTreeMap::new();
+        let mut renamed = std::collections::HashMap::new();
+        for ((_, seq), mut p) in moved {
+            let new_t = match &mut p {
+                Planned::Send {
+                    at_us, score_at_us, ..
+                } => {
+                    let n = shift(*at_us, *score_at_us);
+                    *score_at_us = self.map.wall(old.score(*score_at_us));
+                    *at_us = n;
+                    n
+                }
+                Planned::Dropped { score_at_us, .. } => {
+                    *score_at_us = self.map.wall(old.score(*score_at_us)).max(now_us);
+                    *score_at_us
+                }
+            };
+            renamed.insert(seq, new_t);
+            fixed.insert((new_t, seq), p);
+        }
+        self.queue = fixed;
+        // The movable handles follow their sends; bounds and model times follow the map.
+        let map = self.map;
+        let remap = |t: i64| {
+            if t < now_us {
+                t
+            } else {
+                map.wall(old.score(t))
+            }
+        };
+        for k in &mut self.keys {
+            k.release = k
+                .release
+                .and_then(|((_, seq), floor)| Some(((*renamed.get(&seq)?, seq), remap(floor))));
+            k.last_send = k.last_send.map(remap);
+            k.released_at = k.released_at.map(remap);
+            if let Some(st) = &mut k.strike {
+                st.at = remap(st.at);
+                st.score_at = remap(st.score_at);
+            }
+        }
+        for c in &mut self.channel_cc {
+            *c = c.and_then(|((_, seq), lo)| Some(((*renamed.get(&seq)?, seq), remap(lo))));
+        }
+        for l in &mut self.channel_last {
+            *l = l.map(remap);
+        }
+    }
+
+    /// The wall time of the next send, once it is final; `None` when the song is over.
+    pub fn peek_time(&mut self) -> Option<i64> {
+        if self.eager {
+            while let Some(e) = self.source.next() {
+                self.plan(e);
+            }
+        }
+        loop {
+            let frontier = match self.source.peek() {
+                Some(e) => self.map.wall(e.score_us) - self.lookahead,
+                None => i64::MAX,
+            };
+            if let Some((&(t, _), _)) = self.queue.first_key_value() {
+                if t < frontier {
+                    return Some(t);
+                }
+            }
+            let e = self.source.next()?;
+            self.plan(e);
+        }
+    }
+
+    /// The next send, once it is final; `None` when the song is over.
+    pub fn next_planned(&mut self) -> Option<Planned> {
+        self.peek_time()?;
+        self.queue.pop_first().map(|(_, p)| p)
+    }
+
+    /// The wall time at which the score plays `score_us`.
+    pub fn wall(&self, score_us: u64) -> i64 {
+        self.map.wall(score_us)
+    }
+
+    fn push(&mut self, p: Planned) -> QueueKey {
+        let key = (p.at_us(), self.seq);
+        self.seq += 1;
+        self.queue.insert(key, p);
+        self.stats.peak_queue = self.stats.peak_queue.max(self.queue.len());
+        key
+    }
+
+    fn send(&mut self, at: i64, bytes: WireBytes, note: Option<NoteId>, score_at: i64) -> QueueKey {
+        self.push(Planned::Send {
+            at_us: at,
+            bytes,
+            note,
+            score_at_us: score_at,
+            added: false,
+        })
+    }
+
+    fn plan(&mut self, e: ScoreEvent) {
+        let w = self.map.wall(e.score_us);
+        let note_on = e.bytes.note_on();
+        let id = note_on.map(|_| {
+            let id = self.next_note;
+            self.next_note += 1;
+            id
+        });
+        if !self.rules.compensation {
+            self.send(w, e.bytes, id, w);
+            return;
+        }
+        if let Some((ch, n, _)) = note_on {
+            self.note_on(ch, n, w, e.bytes, id.unwrap_or(0));
+        } else if let Some((ch, n)) = e.bytes.note_off() {
+            self.note_off(ch, n, w, e.bytes);
+        } else if let Some((ch, c, _)) = e.bytes.control_change() {
+            if matches!(c, 64 | 66 | 120 | 121 | 123..=127) {
+                let lo = self.channel_last[usize::from(ch)].unwrap_or(i64::MIN);
+                let at = w.max(lo);
+                if at != w {
+                    self.stats.controllers_moved += 1;
+                }
+                let q = self.send(at, e.bytes, None, w);
+                self.channel_cc[usize::from(ch)] = Some((q, lo));
+            } else {
+                self.send(w, e.bytes, None, w);
+            }
+        } else {
+            self.send(w, e.bytes, None, w);
+        }
+    }
+
+    fn min_hold(&self, key: usize) -> i64 {
+        self.rules.min_hold_us.get(key).copied().unwrap_or(0) as i64
+    }
+
+    /// Whether a strike this late (µs after its score's press time) is within the late
+    /// limit, keeping room for the bus: a strike the interpreter makes at the limit still has
+    /// to queue behind the other boards' writes.
+    fn late_ok(&self, late: i64) -> bool {
+        self.rules
+            .late_limit_us
+            .is_none_or(|l| late <= l as i64 - self.rules.bus_margin_us as i64)
+    }
+
+    /// Whether the interpreter itself drops a press that arrives `wait` before its key may
+    /// strike.
+    fn robot_drops(&self, wait: i64) -> bool {
+        self.rules.late_limit_us.is_some_and(|l| wait > l as i64)
+    }
+
+    /// A note message on channel `ch` is to be sent at `at`: a channel-wide controller after
+    /// it in the queue (before it in the score) moves earlier to stay ahead of it, down to its
+    /// own bound; returns the earliest the note message may go.
+    fn after_controller(&mut self, ch: u8, at: i64) -> i64 {
+        let c = usize::from(ch);
+        let Some((q, lo)) = self.channel_cc[c] else {
+            return at;
+        };
+        if q.0 <= at {
+            return at;
+        }
+        let new_t = at.max(lo);
+        if let Some(p) = self.queue.remove(&q) {
+            let p = match p {
+                Planned::Send {
+                    bytes,
+                    note,
+                    score_at_us,
+                    added,
+                    ..
+                } => Planned::Send {
+                    at_us: new_t,
+                    bytes,
+                    note,
+                    score_at_us,
+                    added,
+                },
+                d => d,
+            };
+            let nq = (new_t, q.1);
+            self.queue.insert(nq, p);
+            self.channel_cc[c] = Some((nq, lo));
+        }
+        at.max(new_t)
+    }
+
+    fn mark(&mut self, ch: u8, key: usize, at: i64) {
+        let c = usize::from(ch);
+        self.channel_last[c] = Some(self.channel_last[c].map_or(at, |l| l.max(at)));
+        self.keys[key].last_send = Some(at);
+    }
+
+    fn note_on(&mut self, ch: u8, n: u8, w: i64, bytes: WireBytes, id: NoteId) {
+        let Some(land) = self.rules.keys.land(ch, n) else {
+            self.send(w, bytes, Some(id), w);
+            return;
+        };
+        let k = usize::from(land.key);
+        let lead = self.rules.press_lead_us.get(k).copied().unwrap_or(0) as i64;
+        let gap = self.rules.restrike_gap_us as i64;
+        let min_press = self.rules.min_press_us as i64;
+        let p_des = w - lead;
+        let repeated = self.on[usize::from(n)] & (1 << ch) != 0;
+        let model = &self.keys[k];
+        let last = model.last_send.unwrap_or(i64::MIN);
+        if !model.holders.is_empty() {
+            // As the interpreter judges it: a note arriving while the key waits to strike, or
+            // less than `min_press` after it struck, joins the strike.
+            let arrival = p_des.max(last);
+            let with_strike = model
+                .strike
+                .is_some_and(|s| s.score_at == w || arrival < s.at + min_press);
+            if with_strike || (!repeated && self.rules.overlap == Overlap::Hold) {
+                // Joins the key: no strike, nothing to move.
+                let at = self.after_controller(ch, p_des.max(last));
+                self.send(at, bytes, Some(id), w);
+                if !repeated {
+                    self.keys[k].holders.push((ch, n));
+                    self.on[usize::from(n)] |= 1 << ch;
+                }
+                self.mark(ch, k, at);
+                return;
+            }
+            // A re-strike: let the key go early enough to rest.
+            let st = model.strike.expect("a held key has a strike");
+            let hold = if st.late {
+                min_press
+            } else {
+                min_press.min(w - st.score_at).max(0)
+            }
+            .max(self.min_hold(k));
+            let floor = last.max(st.at + hold);
+            let r = (p_des - gap).max(floor);
+            let strike_at = p_des.max(r + gap);
+            if !self.late_ok(strike_at - p_des) {
+                // Too fast: nothing moves for it. Arriving on a key that is down, it would
+                // have to wait a whole gap.
+                self.too_fast(ch, n, k, p_des.max(last), p_des, gap, w, bytes, id);
+                return;
+            }
+            let holders = std::mem::take(&mut self.keys[k].holders);
+            for (hc, hn) in holders {
+                self.on[usize::from(hn)] &= !(1 << hc);
+                self.push(Planned::Send {
+                    at_us: r,
+                    bytes: WireBytes::new(&[0x80 | hc, hn, 0]),
+                    note: None,
+                    score_at_us: r,
+                    added: true,
+                });
+                self.stats.early_releases_added += 1;
+                self.mark(hc, k, r);
+            }
+            let m = &mut self.keys[k];
+            m.strike = None;
+            m.released_at = Some(r);
+            m.release = None;
+        } else if let Some((q, floor)) = model.release {
+            // Rule 4: the release waiting in the queue moves earlier if the press needs it.
+            if p_des - q.0 < gap {
+                let r = (p_des - gap).max(floor);
+                let strike_at = p_des.max(r + gap);
+                if r < q.0 && self.late_ok(strike_at - p_des) {
+                    if let Some(Planned::Send {
+                        bytes,
+                        note,
+                        score_at_us,
+                        added,
+                        ..
+                    }) = self.queue.remove(&q)
+                    {
+                        let nq = (r, q.1);
+                        self.queue.insert(
+                            nq,
+                            Planned::Send {
+                                at_us: r,
+                                bytes,
+                                note,
+                                score_at_us,
+                                added,
+                            },
+                        );
+                        let m = &mut self.keys[k];
+                        m.released_at = Some(r);
+                        m.release = Some((nq, floor));
+                        if m.last_send == Some(q.0) {
+                            m.last_send = Some(r);
+                        }
+                        self.stats.releases_moved_early += 1;
+                    }
+                }
+            }
+        }
+        // A strike on a free key.
+        let m = &self.keys[k];
+        let last = m.last_send.unwrap_or(i64::MIN);
+        let free = m.released_at.map_or(i64::MIN, |r| r + gap);
+        let at = self.after_controller(ch, p_des.max(last));
+        let strike_at = at.max(free);
+        if !self.late_ok(strike_at - p_des) {
+            self.too_fast(ch, n, k, at, p_des, strike_at - at, w, bytes, id);
+            return;
+        }
+        if at > p_des {
+            self.stats.presses_held_back += 1;
+        }
+        self.send(at, bytes, Some(id), w);
+        self.mark(ch, k, at);
+        self.on[usize::from(n)] |= 1 << ch;
+        let m = &mut self.keys[k];
+        m.holders.push((ch, n));
+        m.strike = Some(Strike {
+            score_at: w,
+            at: strike_at,
+            late: strike_at > at,
+        });
+        m.release = None;
+    }
+
+    /// A press that cannot strike within the late limit. When the interpreter will see that
+    /// itself (sent on time, it finds its key busy for longer than the limit: `wait`), it is
+    /// sent and the interpreter drops it; otherwise (held back behind the key's earlier
+    /// messages, or late by less than the limit plus the bus margin) only the planner knows,
+    /// and drops it.
+    #[allow(clippy::too_many_arguments)]
+    fn too_fast(
+        &mut self,
+        ch: u8,
+        n: u8,
+        k: usize,
+        at: i64,
+        p_des: i64,
+        wait: i64,
+        w: i64,
+        bytes: WireBytes,
+        id: NoteId,
+    ) {
+        if at > p_des || !self.robot_drops(wait) {
+            self.stats.dropped_too_fast += 1;
+            self.push(Planned::Dropped {
+                score_at_us: w,
+                channel: ch,
+                note_number: n,
+                note: id,
+                reason: DropReason::TooFast,
+            });
+        } else {
+            self.send(at, bytes, Some(id), w);
+            self.mark(ch, k, at);
+        }
+    }
+
+    fn note_off(&mut self, ch: u8, n: u8, w: i64, bytes: WireBytes) {
+        let Some(land) = self.rules.keys.land(ch, n) else {
+            self.send(w, bytes, None, w);
+            return;
+        };
+        let k = usize::from(land.key);
+        let lead = self.rules.release_lead_us.get(k).copied().unwrap_or(0) as i64;
+        let r_des = w - lead;
+        let last = self.keys[k].last_send.unwrap_or(i64::MIN);
+        let was_on = self.on[usize::from(n)] & (1 << ch) != 0;
+        self.on[usize::from(n)] &= !(1 << ch);
+        let m = &mut self.keys[k];
+        if was_on {
+            m.holders.retain(|&h| h != (ch, n));
+        }
+        if !was_on || !m.holders.is_empty() {
+            // No effect on the key: keep its place in the key's order.
+            let at = self.after_controller(ch, r_des.max(last));
+            self.send(at, bytes, None, w);
+            self.mark(ch, k, at);
+            return;
+        }
+        let min_press = self.rules.min_press_us as i64;
+        let min_hold = self.rules.min_hold_us.get(k).copied().unwrap_or(0) as i64;
+        let floor = match m.strike {
+            Some(st) if st.late => last.max(st.at + min_press.max(min_hold)),
+            Some(st) => last.max(st.at + min_press.min(w - st.score_at).max(min_hold)),
+            None => last,
+        };
+        let at = self.after_controller(ch, r_des.max(floor));
+        let q = self.send(at, bytes, None, w);
+        self.mark(ch, k, at);
+        let m = &mut self.keys[k];
+        m.strike = None;
+        m.released_at = Some(at);
+        m.release = Some((q, floor));
+    }
+}

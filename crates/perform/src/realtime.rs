@@ -1,0 +1,76 @@
+//! Real time: the sender on its own thread, a precise clock, lateness per message sent.
+//!
+//! [`PreciseClock`] waits with `spin_sleep` (the OS sleep for the bulk of the wait, then a
+//! spin for the last stretch, so a deadline is met to a few µs on an idle machine instead of a
+//! scheduler tick). [`spawn`] runs a performance on a thread of its own, asking the OS for
+//! real-time priority first ([`raise_priority`]); the caller's thread stays free for the view.
+
+use std::time::{Duration, Instant};
+
+use orch_seq::{Clock, Lateness};
+
+/// The host's monotonic clock, waiting with `spin_sleep`. It never wakes early.
+#[derive(Debug)]
+pub struct PreciseClock {
+    start: Instant,
+    sleeper: spin_sleep::SpinSleeper,
+    samples: Vec<u64>,
+}
+
+impl PreciseClock {
+    /// A clock starting now.
+    pub fn new() -> Self {
+        Self {
+            start: Instant::now(),
+            sleeper: spin_sleep::SpinSleeper::default(),
+            samples: Vec::new(),
+        }
+    }
+}
+
+impl Default for PreciseClock {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Clock for PreciseClock {
+    fn now_us(&self) -> u64 {
+        u64::try_from(self.start.elapsed().as_micros()).unwrap_or(u64::MAX)
+    }
+
+    fn wait_until(&mut self, deadline_us: u64) -> u64 {
+        let now = self.now_us();
+        if deadline_us > now {
+            self.sleeper
+                .sleep(Duration::from_micros(deadline_us - now));
+        }
+        let late = self.now_us().saturating_sub(deadline_us);
+        self.samples.push(late);
+        late
+    }
+
+    fn lateness(&self) -> Lateness {
+        Lateness::of(&self.samples)
+    }
+}
+
+/// Asks the OS to run the current thread at real-time priority. Returns whether it did
+/// (an unprivileged process on Linux usually may not; orch then plays at normal priority).
+pub fn raise_priority() -> bool {
+    thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Max).is_ok()
+}
+
+/// Runs `f` on a thread of its own at real-time priority where the OS allows it. The
+/// handle's result says whether the priority was raised, with `f`'s result.
+pub fn spawn<T: Send + 'static>(
+    f: impl FnOnce() -> T + Send + 'static,
+) -> std::thread::JoinHandle<(bool, T)> {
+    std::thread::Builder::new()
+        .name("orch-sender".into())
+        .spawn(move || {
+            let raised = raise_priority();
+            (raised, f())
+        })
+        .expect("a thread can be started")
+}

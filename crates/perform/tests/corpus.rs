@@ -1,0 +1,186 @@
+//! Every well-formed file of the shared corpus, performed on the virtual robot: the account
+//! adds up, every struck note found its sound, compensation lands notes on time, and the
+//! streaming planner equals planning the whole song first.
+
+use std::path::PathBuf;
+
+use orch_perform::{
+    perform, song_events, thesis_config, Link, MidiRecording, Played, Planner, Setup, Tempo,
+};
+use orch_seq::{Song, VirtualClock};
+
+fn corpus() -> Vec<(String, Song)> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/midi");
+    let manifest = std::fs::read_to_string(dir.join("MANIFEST.tsv"))
+        .expect("the shared MIDI corpus (../shared/midi) is beside the checkout");
+    let mut out = Vec::new();
+    for line in manifest.lines().skip(1) {
+        let file = line.split('\t').next().unwrap_or("");
+        let Ok(bytes) = std::fs::read(dir.join(file)) else {
+            continue;
+        };
+        if let Ok(song) = Song::parse(&bytes) {
+            out.push((file.to_string(), song));
+        }
+    }
+    assert!(out.len() > 80, "only {} corpus files parse", out.len());
+    out
+}
+
+fn setup(compensation: bool, link: Link) -> Setup {
+    Setup {
+        config: thesis_config(),
+        sim: orch_sim::SimConfig {
+            clock: orch_sim::BusClock::FAST,
+            ..orch_sim::SimConfig::thesis()
+        },
+        compensation,
+        tempo: Tempo::NORMAL,
+        link,
+    }
+}
+
+fn play(setup: &Setup, song: &Song) -> Played {
+    perform::<_, MidiRecording>(
+        setup,
+        song_events(song),
+        song.notes(),
+        None,
+        &mut VirtualClock::new(),
+        None,
+        None,
+    )
+    .unwrap()
+}
+
+#[test]
+fn every_corpus_file_adds_up_finds_every_sound_and_lands_on_time() {
+    let s = setup(true, Link::Direct);
+    let late_limit = 30.0;
+    let mut all = orch_perform::Outcomes::default();
+    for (file, song) in corpus() {
+        let played = play(&s, &song);
+        let r = played.report(None);
+        assert_eq!(r.notes, song.notes() as u64, "{file}");
+        assert!(r.adds_up(), "{file}: {:?}", r);
+        assert_eq!(r.unmatched, 0, "{file}");
+        assert_eq!(r.outcomes.early, 0, "{file}");
+        assert_eq!(r.strikes, r.outcomes.on_time + r.outcomes.late, "{file}");
+        assert!(r.onset_ms.median <= 0.1, "{file}: {:?}", r.onset_ms);
+        assert!(r.onset_ms.max <= late_limit, "{file}: {:?}", r.onset_ms);
+        let o = r.outcomes;
+        all.on_time += o.on_time;
+        all.late += o.late;
+        all.unison += o.unison;
+        all.joined += o.joined;
+        all.dropped.too_fast += o.dropped.too_fast;
+        all.dropped.power += o.dropped.power;
+    }
+    eprintln!("corpus: {all:?}");
+}
+
+#[test]
+fn without_compensation_every_struck_note_is_late_by_its_press_delay() {
+    let s = setup(false, Link::Direct);
+    for (file, song) in corpus().into_iter().take(20) {
+        let r = play(&s, &song).report(None);
+        // Plain score timing: a note shorter than a key's shortest sounding press makes no
+        // sound, and says so (unmatched), which compensation avoids.
+        assert!(r.adds_up(), "{file}");
+        if r.strikes > 0 {
+            assert!(r.onset_ms.median >= 15.0, "{file}: {:?}", r.onset_ms);
+        }
+    }
+}
+
+#[test]
+fn the_streaming_planner_equals_planning_the_whole_song() {
+    let s = setup(true, Link::Direct);
+    for (file, song) in corpus() {
+        let mut streaming = Planner::new(song_events(&song), s.rules(), 1_000, Tempo::NORMAL);
+        let mut whole =
+            Planner::new(song_events(&song), s.rules(), 1_000, Tempo::NORMAL).eager();
+        let mut n = 0;
+        loop {
+            let (a, b) = (streaming.next_planned(), whole.next_planned());
+            assert_eq!(a, b, "{file}: send {n} differs");
+            if a.is_none() {
+                break;
+            }
+            n += 1;
+        }
+        let (a, b) = (streaming.stats(), whole.stats());
+        assert_eq!(
+            orch_perform::PlanStats {
+                peak_queue: 0,
+                ..a
+            },
+            orch_perform::PlanStats {
+                peak_queue: 0,
+                ..b
+            },
+            "{file}"
+        );
+        // Bounded lookahead: the queue never holds the whole song.
+        if song.notes() > 2_000 {
+            assert!(
+                streaming.stats().peak_queue < song.events().len() / 4,
+                "{file}: {} queued of {}",
+                streaming.stats().peak_queue,
+                song.events().len()
+            );
+        }
+    }
+}
+
+#[test]
+#[ignore]
+fn dbg_one() {
+    let file = std::env::var("F").unwrap();
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/midi");
+    let song = Song::parse(&std::fs::read(dir.join(file)).unwrap()).unwrap();
+    let played = play(&setup(true, Link::Direct), &song);
+    let mut n = 0;
+    for r in &played.records {
+        let bad = match r.outcome {
+            orch_perform::Outcome::Unmatched => true,
+            orch_perform::Outcome::Late { by_ms } => by_ms > 30.0,
+            _ => false,
+        };
+        if bad && n < 10 {
+            n += 1;
+            eprintln!("{r:?}");
+            let k = r.landing.unwrap().key;
+            for p in played.performance.presses.iter().filter(|p| p.key == k && (p.pin_high.as_micros() as i64 - r.score_at_us).abs() < 200_000) {
+                eprintln!("   {p:?}");
+            }
+        }
+    }
+    if let Ok(k) = std::env::var("K") {
+        let k: u8 = k.parse().unwrap();
+        let t0: u64 = std::env::var("T0").unwrap().parse().unwrap();
+        for e in played.performance.edges.iter().filter(|e| e.key == Some(k) && e.time.as_micros().abs_diff(t0) < 150_000) {
+            eprintln!("edge {} {}", e.time.as_micros(), e.high);
+        }
+        for r in played.records.iter().filter(|r| r.landing.is_some_and(|l| l.key == k) && (r.score_at_us as u64).abs_diff(t0) < 150_000) {
+            eprintln!("{r:?}");
+        }
+    }
+    eprintln!("{}", played.report(None).text());
+}
+
+#[test]
+#[ignore]
+fn dbg_plan() {
+    let file = std::env::var("F").unwrap();
+    let t0: i64 = std::env::var("T0").unwrap().parse().unwrap();
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/midi");
+    let song = Song::parse(&std::fs::read(dir.join(file)).unwrap()).unwrap();
+    let s = setup(true, Link::Direct);
+    let mut p = Planner::new(song_events(&song), s.rules(), 1_000, Tempo::NORMAL);
+    while let Some(x) = p.next_planned() {
+        if (x.at_us() - t0).abs() < 150_000 {
+            eprintln!("{x:?}");
+        }
+    }
+}
