@@ -111,10 +111,23 @@ pub fn run(args: &InterpretArgs) -> anyhow::Result<()> {
         )?;
         writeln!(
             out,
-            "# {} notes: {} played, {} folded, {} dropped (channel {}, range {}, power {}, cancelled {}); {} re-strikes delayed, {} cut by the hold limit, {} by the watchdog; at most {} keys down",
-            s.note_ons, s.played, s.folded, s.dropped(), s.dropped_channel, s.dropped_range,
-            s.dropped_power, s.dropped_cancelled, s.restrikes_delayed, s.cut_by_hold_limit,
-            s.cut_by_watchdog, s.peak_keys_down
+            "# {} notes: {} sounded ({} of them folded, {} joined a key already down), {} dropped (channel {}, range {}, power {}, too fast {}, cancelled {}, stopped {}); {} re-strikes waited for their key's rest; cut: {} by the hold limit, {} by the duty limit, {} by the watchdog; at most {} keys down",
+            s.note_ons,
+            s.played + s.folded,
+            s.folded,
+            s.joined,
+            s.dropped(),
+            s.dropped_channel,
+            s.dropped_range,
+            s.dropped_power,
+            s.dropped_too_fast,
+            s.dropped_cancelled,
+            s.dropped_stopped,
+            s.restrikes_delayed,
+            s.cut_by_hold_limit,
+            s.cut_by_duty_limit,
+            s.cut_by_watchdog,
+            s.peak_keys_down
         )?;
         let finals: Vec<String> = boards
             .iter()

@@ -6,14 +6,11 @@
 
 pub mod cli;
 pub mod decode;
-pub mod engine;
 pub mod error;
 pub mod hex;
 pub mod input;
 pub mod interpret;
-pub mod perform;
 pub mod play;
-pub mod report;
 pub mod robot;
 pub mod show;
 pub mod view;

@@ -1,16 +1,23 @@
-//! `orch play` and `orch analyze`: a Standard MIDI File on the virtual robot, and the report.
+//! `orch play` and `orch analyze`: a Standard MIDI File performed on the virtual robot by
+//! `orch-perform`, and the report.
 
 use std::io::{IsTerminal, Write};
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
-use orch_seq::{RealClock, Song, TempoScale};
+use orch_perform::{
+    perform, realtime, song_events, Control, Link, Live, MidiRecording, Outcome, Played, Report,
+    Setup, Spread, Tempo,
+};
+use orch_seq::{Song, VirtualClock};
+use serde::Serialize;
 
 use crate::cli::{AnalyzeArgs, PlayArgs};
 use crate::error::bad_input;
-use crate::perform::{perform, Options, Outcome};
-use crate::report::Report;
 use crate::robot::Robot;
-use crate::view::{Scene, View};
+use crate::view::{note_name, Scene, View};
 
 /// Reads and parses a Standard MIDI File; any damage is bad input (exit 2).
 pub fn load_song(path: &Path) -> anyhow::Result<Song> {
@@ -31,95 +38,156 @@ pub fn load_robot(path: Option<&Path>) -> anyhow::Result<Robot> {
     }
 }
 
-fn scale(tempo: f64) -> anyhow::Result<TempoScale> {
-    TempoScale::new(tempo).ok_or_else(|| {
+fn tempo(factor: f64) -> anyhow::Result<Tempo> {
+    Tempo::new(factor).ok_or_else(|| {
         bad_input(format!(
-            "--tempo {tempo}: give a factor above 0, such as 0.5 or 1.25"
+            "--tempo {factor}: give a factor above 0, such as 0.5 or 1.25"
         ))
     })
 }
 
-/// The report of a performance, with the same piece rendered without compensation beside it.
-fn report(
-    song: &Song,
-    robot: &Robot,
-    options: Options,
-    played: &Outcome,
-) -> anyhow::Result<Report> {
-    let plain = Options {
-        compensation: false,
-        ..options
-    };
-    let uncompensated = render(song, robot, plain)?;
-    Ok(Report::new(song.notes() as u64, played, &uncompensated))
+/// How `robot` plays, with or without compensation, at `tempo`, on this host.
+pub fn setup(robot: &Robot, compensation: bool, tempo: Tempo) -> Setup {
+    Setup {
+        config: robot.config,
+        sim: robot.sim_config(),
+        compensation,
+        tempo,
+        link: Link::Direct,
+    }
 }
 
 /// Plays on the virtual clock: as fast as the machine goes.
-pub fn render(song: &Song, robot: &Robot, options: Options) -> anyhow::Result<Outcome> {
-    perform(song, robot, options, None, |_| true)
+pub fn render(song: &Song, setup: &Setup) -> anyhow::Result<Played> {
+    Ok(perform::<_, MidiRecording>(
+        setup,
+        song_events(song),
+        song.notes(),
+        None,
+        &mut VirtualClock::new(),
+        None,
+        None,
+    )?)
+}
+
+/// The onset error of the same piece without compensation, for comparison.
+fn uncompensated(song: &Song, setup: &Setup) -> anyhow::Result<Option<Spread>> {
+    if !setup.compensation {
+        return Ok(None);
+    }
+    let plain = Setup {
+        compensation: false,
+        ..setup.clone()
+    };
+    Ok(Some(Spread::of_onsets(&render(song, &plain)?.records)))
 }
 
 pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
     let song = load_song(&args.file)?;
     let robot = load_robot(args.robot.as_deref())?;
-    let options = Options {
-        compensation: !args.no_compensation,
-        scale: scale(args.tempo)?,
-    };
+    let setup = setup(&robot, !args.no_compensation, tempo(args.tempo)?);
     let played = if args.fast {
-        render(&song, &robot, options)?
+        render(&song, &setup)?
     } else {
-        play_live(&song, &robot, options, args)?
+        play_live(song.clone(), &setup, args)?
     };
-    print_report(
-        &report(&song, &robot, options, &played)?,
-        args.json,
-        &args.file,
-    )
+    let report = played.report(uncompensated(&song, &setup)?);
+    print_report(&report, args.json, &args.file)
 }
 
-fn play_live(
-    song: &Song,
-    robot: &Robot,
-    options: Options,
-    args: &PlayArgs,
-) -> anyhow::Result<Outcome> {
-    let mut clock = RealClock::new();
+/// Set by SIGINT, SIGTERM and SIGHUP: stop the way `q` does.
+fn stop_on_signals() -> anyhow::Result<Arc<AtomicBool>> {
+    let flag = Arc::new(AtomicBool::new(false));
+    for sig in [
+        signal_hook::consts::SIGINT,
+        signal_hook::consts::SIGTERM,
+        signal_hook::consts::SIGHUP,
+    ] {
+        signal_hook::flag::register(sig, Arc::clone(&flag))?;
+    }
+    Ok(flag)
+}
+
+/// Plays in real time: the sender on its own thread (real-time priority where allowed), the
+/// view on this one. `q`, SIGINT, SIGTERM and SIGHUP stop it with every key released, and the
+/// report still comes.
+fn play_live(song: Song, setup: &Setup, args: &PlayArgs) -> anyhow::Result<Played> {
+    let signalled = stop_on_signals()?;
     let show = !args.no_view && std::io::stdout().is_terminal();
-    let mut view = if show { Some(View::start()?) } else { None };
     let title = args
         .file
         .file_name()
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-    let low = robot.config.range.low().get();
-    let total_s = song.duration_us() as f64 / 1e6 / options.scale.get();
+    let control = Control::new();
+    let live: Arc<Mutex<Option<Live>>> = Arc::new(Mutex::new(None));
+    let song = Arc::new(song);
+    let sender = {
+        let (setup, control, live, song) = (
+            setup.clone(),
+            Arc::clone(&control),
+            Arc::clone(&live),
+            Arc::clone(&song),
+        );
+        realtime::spawn(move || {
+            let mut clock = realtime::PreciseClock::new();
+            let mut on_live = |l: &Live| {
+                *live.lock().unwrap_or_else(|e| e.into_inner()) = Some(l.clone());
+            };
+            perform::<_, MidiRecording>(
+                &setup,
+                song_events(&song),
+                song.notes(),
+                None,
+                &mut clock,
+                Some(&control),
+                Some(&mut on_live),
+            )
+        })
+    };
+    let mut view = if show { Some(View::start()?) } else { None };
+    let low = setup.config.range.low().get();
+    let total_s = song.duration_us() as f64 / 1e6 / setup.tempo.get();
     let mut view_error = None;
-    let outcome = perform(song, robot, options, Some(&mut clock), |p| {
-        let Some(v) = view.as_mut() else { return true };
-        let (bar, beat) = song.bar_beat(p.song_us);
-        let scene = Scene {
-            title: title.clone(),
-            low_note: low,
-            down: p.engine.keys_down(),
-            bar,
-            beat,
-            bpm: song.tempo_at(p.song_us).bpm() * options.scale.get(),
-            elapsed_s: p.song_us as f64 / 1e6 / options.scale.get(),
-            total_s,
-            notes_sent: p.notes_sent,
-            notes: song.notes() as u64,
-        };
-        if let Err(e) = v.draw(&scene) {
-            view_error = Some(e);
-            return false;
+    while !sender.is_finished() {
+        if signalled.load(Ordering::SeqCst) {
+            control.stop();
         }
-        !crate::view::quit_requested()
-    });
+        if let Some(v) = view.as_mut() {
+            if crate::view::quit_requested() {
+                control.stop();
+            }
+            let snapshot = live.lock().unwrap_or_else(|e| e.into_inner()).clone();
+            if let Some(l) = snapshot {
+                let (bar, beat) = song.bar_beat(l.song_us);
+                let scene = Scene {
+                    title: title.clone(),
+                    low_note: low,
+                    down: l.keys_down,
+                    bar,
+                    beat,
+                    bpm: song.tempo_at(l.song_us).bpm() * l.tempo,
+                    elapsed_s: l.song_us as f64 / 1e6 / l.tempo,
+                    total_s,
+                    notes_sent: l.notes_sent,
+                    notes: song.notes() as u64,
+                };
+                if let Err(e) = v.draw(&scene) {
+                    view_error = Some(e);
+                    control.stop();
+                }
+            }
+        } else {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
     drop(view);
+    let (_raised, played) = sender
+        .join()
+        .map_err(|_| anyhow::anyhow!("the sender thread panicked"))?;
     if let Some(e) = view_error {
         return Err(e.into());
     }
-    outcome
+    Ok(played?)
 }
 
 fn print_report(report: &Report, json: bool, file: &Path) -> anyhow::Result<()> {
@@ -133,80 +201,179 @@ fn print_report(report: &Report, json: bool, file: &Path) -> anyhow::Result<()> 
     Ok(())
 }
 
+/// A note that will go wrong, for `orch analyze`.
+#[derive(Debug, Serialize)]
+pub struct Wrong {
+    pub bar: u32,
+    pub beat: u32,
+    /// The note's name as written ("C4" for 60).
+    pub note: String,
+    /// 1..=16, as people count channels.
+    pub channel: u8,
+    /// late, early, joined, unmatched, or the drop's reason.
+    pub outcome: &'static str,
+    /// How late or early, ms (late and early only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ms: Option<f64>,
+}
+
+/// The notes that will go wrong, the worst first. Bars and beats are the song's own: the
+/// tempo factor it was played at is undone.
+pub fn went_wrong(song: &Song, played: &Played, tempo: Tempo) -> Vec<Wrong> {
+    played
+        .went_wrong()
+        .into_iter()
+        .map(|r| {
+            let wall = (r.score_at_us - played.start_us as i64).max(0) as f64;
+            let (bar, beat) = song.bar_beat((wall * tempo.get()).round() as u64);
+            Wrong {
+                bar,
+                beat,
+                note: note_name(r.note),
+                channel: r.channel + 1,
+                outcome: r.outcome.name(),
+                ms: match r.outcome {
+                    Outcome::Late { by_ms } | Outcome::Early { by_ms } => {
+                        Some((by_ms * 1000.0).round() / 1000.0)
+                    }
+                    _ => None,
+                },
+            }
+        })
+        .collect()
+}
+
+#[derive(Serialize)]
+struct Analysis<'a> {
+    #[serde(flatten)]
+    report: &'a Report,
+    went_wrong: &'a [Wrong],
+}
+
 pub fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
     let song = load_song(&args.file)?;
     let robot = load_robot(args.robot.as_deref())?;
-    let options = Options {
-        compensation: true,
-        scale: scale(args.tempo)?,
-    };
-    let played = render(&song, &robot, options)?;
-    let report = report(&song, &robot, options, &played)?;
-    if args.json {
-        return print_report(&report, true, &args.file);
-    }
+    let setup = setup(&robot, true, tempo(args.tempo)?);
+    let played = render(&song, &setup)?;
+    let report = played.report(uncompensated(&song, &setup)?);
+    let wrong = went_wrong(&song, &played, setup.tempo);
     let mut out = std::io::stdout().lock();
+    if args.json {
+        let a = Analysis {
+            report: &report,
+            went_wrong: &wrong,
+        };
+        writeln!(out, "{}", serde_json::to_string(&a)?)?;
+        return Ok(());
+    }
     writeln!(out, "{}", args.file.display())?;
     for finding in findings(&song, &robot, &report) {
         writeln!(out, "- {finding}")?;
+    }
+    if !wrong.is_empty() {
+        writeln!(out)?;
+        writeln!(out, "notes that will go wrong, the worst first:")?;
+        for w in wrong.iter().take(LISTED) {
+            let amount = w.ms.map_or(String::new(), |ms| format!(" by {ms:.1} ms"));
+            writeln!(
+                out,
+                "  {:>4}:{:<2} {:<4} ch {:<2} {}{}",
+                w.bar, w.beat, w.note, w.channel, w.outcome, amount
+            )?;
+        }
+        if wrong.len() > LISTED {
+            writeln!(
+                out,
+                "  … and {} more (--json lists them all)",
+                wrong.len() - LISTED
+            )?;
+        }
     }
     writeln!(out)?;
     write!(out, "{}", report.text())?;
     Ok(())
 }
 
+/// Notes `orch analyze` lists in text.
+const LISTED: usize = 20;
+
 /// What will go wrong, in words.
 fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
     let mut f = Vec::new();
-    let sounded = r.played + r.folded;
-    let share = |n: u32| 100.0 * n as f64 / r.notes.max(1) as f64;
+    if !robot.config.guard.enabled {
+        f.push(
+            "WARNING: the safety guard is OFF in this robot.toml: no hold limit, duty limit, \
+             power budget or watchdog protects the solenoids. Never play a robot like this."
+                .into(),
+        );
+    }
     if r.notes == 0 {
         f.push("the file has no notes to play".into());
         return f;
     }
+    let o = &r.outcomes;
+    let share = |n: u64| 100.0 * n as f64 / r.notes.max(1) as f64;
+    let heard = o.on_time + o.late + o.early + o.unison;
     f.push(format!(
-        "{} of {} notes ({:.1}%) will be played; {:.3} s long",
-        sounded,
+        "{} of {} notes ({:.1}%) will sound: {} on time, {} late, {} in unison; {:.3} s long",
+        heard,
         r.notes,
-        share(sounded),
+        share(heard),
+        o.on_time,
+        o.late,
+        o.unison,
         song.duration_us() as f64 / 1e6
     ));
-    let d = &r.dropped;
+    let d = &o.dropped;
     let budget = robot.config.guard.max_keys_down;
-    let counted: [(u64, String); 8] = [
+    let counted: [(u64, String); 11] = [
         (
-            r.folded.into(),
+            o.joined,
+            "notes land on a key already down for another note and make no sound of their own"
+                .into(),
+        ),
+        (
+            r.folded,
             "notes are outside the keys and will be folded by octaves".into(),
         ),
         (
-            d.range.into(),
+            d.range,
             "notes are outside the keys and will not be played".into(),
         ),
         (
-            d.channel.into(),
+            d.channel,
             "notes are on channels the robot does not listen to".into(),
         ),
         (
-            d.power.into(),
+            d.power,
             format!(
                 "notes would pass the power budget of {budget} keys at once and will be refused"
             ),
         ),
         (
-            r.restrikes_delayed.into(),
-            "repeated notes come too fast and will strike late to let the key rest".into(),
+            d.too_fast,
+            "notes repeat a key too fast to strike it again within the late limit and will be dropped"
+                .into(),
         ),
         (
-            r.cut_by_hold_limit.into(),
+            r.cut_by_hold_limit,
             "keys are held past the hold limit and will be cut short".into(),
         ),
         (
-            r.too_short_to_sound,
-            "presses are too short for the key to sound".into(),
+            r.cut_by_duty_limit,
+            "keys are energised past the duty limit and will be cut".into(),
+        ),
+        (
+            r.unmatched,
+            "notes strike but are too short for the key to sound".into(),
         ),
         (
             r.smeared,
             "presses come before the key is back up and will smear".into(),
+        ),
+        (
+            d.cancelled,
+            "re-strikes waiting for their key's rest will be cancelled".into(),
         ),
     ];
     f.extend(

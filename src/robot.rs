@@ -91,6 +91,11 @@ out_of_range = "fold"
 channels = "all"
 # Let the sustain pedal (CC 64) hold released keys down. Off by default: a held solenoid heats up.
 sustain = false
+# A second note on a key that is down (the same note on another channel, a note folded onto
+# it, or the same note again): "restrike" lifts the key, rests and strikes again (the
+# sequencer releases early so it lands on time); "hold" keeps it down for both, and the new
+# note makes no sound of its own. Restrike by default: the ear follows onsets.
+overlap = "restrike"
 
 # The finger boards (PCA9555 or TCA9555), in key order: each drives `keys` consecutive keys
 # from output bit `first_bit` (bits 0-7 are port 0, 8-15 port 1).
@@ -138,6 +143,9 @@ max_keys_down = 16        # the power budget: a new note past it is refused
 restrike_gap = "60ms"     # the shortest rest before a key strikes again
 min_press = "20ms"        # how long a delayed re-strike is held if its note ended while it waited
 watchdog = "4s"           # release every key after this long without a byte
+late_limit = "30ms"       # a re-strike that would sound later than this is dropped (too fast)
+duty_window = "60s"       # the duty limit: a key may be energised at most duty_max_on
+duty_max_on = "30s"       #   in any duty_window ("off": no duty limit)
 "#;
 
 #[derive(Deserialize, Default)]
@@ -236,6 +244,14 @@ struct Keys {
     out_of_range: Policy,
     channels: Channels,
     sustain: bool,
+    overlap: OverlapWord,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum OverlapWord {
+    Hold,
+    Restrike,
 }
 
 impl Default for Keys {
@@ -246,6 +262,7 @@ impl Default for Keys {
             out_of_range: Policy::Fold,
             channels: Channels::All(AllWord::All),
             sustain: false,
+            overlap: OverlapWord::Restrike,
         }
     }
 }
@@ -288,6 +305,9 @@ struct Guard {
     restrike_gap: String,
     min_press: String,
     watchdog: String,
+    late_limit: String,
+    duty_window: String,
+    duty_max_on: String,
 }
 
 impl Default for Guard {
@@ -299,6 +319,9 @@ impl Default for Guard {
             restrike_gap: "60ms".into(),
             min_press: "20ms".into(),
             watchdog: "4s".into(),
+            late_limit: "30ms".into(),
+            duty_window: "60s".into(),
+            duty_max_on: "30s".into(),
         }
     }
 }
@@ -430,6 +453,25 @@ impl File {
                 .unwrap_or(Duration::ZERO),
             min_press: duration("guard.min_press", &g.min_press)?.unwrap_or(Duration::ZERO),
             watchdog: duration("guard.watchdog", &g.watchdog)?,
+            late_limit: duration("guard.late_limit", &g.late_limit)?,
+            duty: match (
+                duration("guard.duty_window", &g.duty_window)?,
+                duration("guard.duty_max_on", &g.duty_max_on)?,
+            ) {
+                (Some(window), Some(max_on)) => {
+                    if max_on == Duration::ZERO
+                        || max_on > window
+                        || max_on > orch_core::DutyLimit::MAX_ON
+                    {
+                        return Err(bad_input(format!(
+                            "guard.duty_max_on = {:?}: must be above 0, at most guard.duty_window ({:?}) and at most 60s",
+                            g.duty_max_on, g.duty_window
+                        )));
+                    }
+                    Some(orch_core::DutyLimit { window, max_on })
+                }
+                _ => None,
+            },
         };
         let config = Config {
             channels,
@@ -440,6 +482,10 @@ impl File {
             },
             layout,
             sustain: k.sustain,
+            overlap: match k.overlap {
+                OverlapWord::Hold => orch_core::Overlap::Hold,
+                OverlapWord::Restrike => orch_core::Overlap::Restrike,
+            },
             guard,
         };
         config
@@ -495,6 +541,7 @@ mod tests {
         assert_eq!(r.boards, 4);
         assert_eq!(r.config.range, t.range);
         assert_eq!(r.config.guard, t.guard);
+        assert_eq!(r.config.overlap, t.overlap);
         assert_eq!(r.config.channels, t.channels);
         assert_eq!(&r.config.layout.boards[..4], &t.layout.boards[..]);
         assert_eq!(Robot::from_toml("").unwrap().config, r.config);

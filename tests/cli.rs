@@ -173,10 +173,14 @@ fn interpret_json_writes_one_board_per_change_and_ends_with_final_state() {
 
 #[test]
 fn interpret_guard_delays_a_repeated_note_and_guard_off_does_not() {
-    // On, off, on again 1 ms later: the guard makes the key rest 60 ms first.
+    // On, off, and on again 36 ms later: the guard makes the key rest its 60 ms first (a wait
+    // of 24 ms, within the 30 ms late limit). Active-sensing bytes fill the time.
     let hex = "90 3C 7F 80 3C 00 90 3C 7F";
-    let mut long = String::from(hex);
-    // Active-sensing bytes keep the line alive past the 60 ms gap (64 ms of bytes).
+    let mut long = String::from("90 3C 7F 80 3C 00");
+    for _ in 0..110 {
+        long.push_str(" FE");
+    }
+    long.push_str(" 90 3C 7F");
     for _ in 0..200 {
         long.push_str(" FE");
     }
@@ -207,7 +211,7 @@ fn interpret_text_shows_fingers_and_stats() {
         text.contains("0x22 <- 0x0100  |........#.......|"),
         "{text}"
     );
-    assert!(text.contains("1 notes: 1 played"), "{text}");
+    assert!(text.contains("1 notes: 1 sounded"), "{text}");
     assert!(text.contains("# final: 0x21=0x0000 0x22=0x0100"), "{text}");
 }
 
@@ -341,15 +345,29 @@ fn play_fast_json_report_adds_up() {
         String::from_utf8_lossy(&out.stderr)
     );
     let r: Value = serde_json::from_slice(&out.stdout).unwrap();
-    let d = &r["dropped"];
-    let sum = ["channel", "range", "power", "cancelled"]
+    let o = &r["outcomes"];
+    let d = &o["dropped"];
+    let n = |v: &Value| v.as_u64().unwrap();
+    let dropped: u64 = [
+        "channel",
+        "range",
+        "power",
+        "too_fast",
+        "cancelled",
+        "stopped",
+    ]
+    .iter()
+    .map(|k| n(&d[*k]))
+    .sum();
+    let sum = ["on_time", "late", "unison", "joined"]
         .iter()
-        .map(|k| d[k].as_u64().unwrap())
+        .map(|k| n(&o[*k]))
         .sum::<u64>()
-        + r["played"].as_u64().unwrap()
-        + r["folded"].as_u64().unwrap();
+        + dropped;
     assert_eq!(r["notes"], 2308);
-    assert_eq!(sum, 2308);
+    assert_eq!(sum, 2308, "{o}");
+    assert_eq!(n(&r["strikes"]), n(&o["on_time"]) + n(&o["late"]));
+    assert_eq!(r["unmatched"], 0);
     assert_eq!(r["folded"], 9);
     for key in ["onset_ms", "onset_uncompensated_ms"] {
         for f in ["median", "p99", "max"] {
@@ -383,9 +401,14 @@ fn analyze_says_what_will_go_wrong() {
         .unwrap();
     let r: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
-        r["dropped"]["range"], 491,
+        r["outcomes"]["dropped"]["range"], 491,
         "the MANIFEST's out-of-range count"
     );
+    // And it lists the notes that go wrong, worst first, with bar:beat and names.
+    let wrong = r["went_wrong"].as_array().unwrap();
+    assert!(wrong.iter().filter(|w| w["outcome"] == "range").count() == 491);
+    assert!(wrong[0]["bar"].as_u64().unwrap() >= 1);
+    assert!(wrong[0]["note"].is_string());
 }
 
 #[test]

@@ -160,12 +160,16 @@ impl Ledger {
     pub fn decided(&mut self, t_us: u64, event: NoteEvent) {
         match event {
             NoteEvent::Struck { at, .. } => {
-                let Some(id) = self.in_flight.pop_front() else { return };
+                let Some(id) = self.in_flight.pop_front() else {
+                    return;
+                };
                 self.entry(id).landing = Some(at);
                 self.strike(id, at.key, t_us);
             }
             NoteEvent::Waiting { at, .. } => {
-                let Some(id) = self.in_flight.pop_front() else { return };
+                let Some(id) = self.in_flight.pop_front() else {
+                    return;
+                };
                 let e = self.entry(id);
                 e.landing = Some(at);
                 e.state = State::Waiting;
@@ -176,7 +180,9 @@ impl Ledger {
             NoteEvent::Joined {
                 at, with_strike, ..
             } => {
-                let Some(id) = self.in_flight.pop_front() else { return };
+                let Some(id) = self.in_flight.pop_front() else {
+                    return;
+                };
                 let k = at.key as usize;
                 let owner = self.waiting[k].or(self.owner[k]);
                 let score_at = self.entry(id).score_at;
@@ -195,7 +201,9 @@ impl Ledger {
                 });
             }
             NoteEvent::Dropped { at, reason, .. } => {
-                let Some(id) = self.in_flight.pop_front() else { return };
+                let Some(id) = self.in_flight.pop_front() else {
+                    return;
+                };
                 let e = self.entry(id);
                 e.landing = at;
                 e.state = State::Done(Outcome::Dropped(reason));

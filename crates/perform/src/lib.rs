@@ -54,8 +54,8 @@
 
 pub mod ledger;
 pub mod link;
-pub mod plan;
 pub mod performer;
+pub mod plan;
 pub mod realtime;
 pub mod report;
 pub mod robot;

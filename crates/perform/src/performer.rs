@@ -236,8 +236,7 @@ impl Played {
             bus: Bus {
                 writes: bus.transactions,
                 bytes: bus.bytes,
-                busy_percent: (bus.busy_nanos as f64 / 1000.0 / span * 100_000.0).round()
-                    / 1000.0,
+                busy_percent: (bus.busy_nanos as f64 / 1000.0 / span * 100_000.0).round() / 1000.0,
             },
             seconds: (span / 1e4).round() / 100.0,
             lateness_ms: self.lateness_us.as_ref().map(|l| {
@@ -259,11 +258,7 @@ impl Played {
                 _ => (9, 0),
             }
         };
-        let mut v: Vec<&NoteRecord> = self
-            .records
-            .iter()
-            .filter(|r| rank(r).0 < 9)
-            .collect();
+        let mut v: Vec<&NoteRecord> = self.records.iter().filter(|r| rank(r).0 < 9).collect();
         v.sort_by_key(|r| (rank(r), r.score_at_us));
         v
     }
@@ -332,7 +327,9 @@ where
                 planner.set_tempo(clock.now_us() as i64, t);
             }
         }
-        let Some(next) = planner.peek_time() else { break };
+        let Some(next) = planner.peek_time() else {
+            break;
+        };
         let next = next.max(0) as u64;
         // Keep the line alive through long silences (generated as the time comes, never
         // stored: memory follows the events, not the length of a silence).
@@ -372,19 +369,42 @@ where
             clock.wait_until(due.0);
         }
         if due.1 {
-            deliver(&mut out, setup.link, due.0, &[0xFE], None, &mut robot, &mut ledger)?;
+            deliver(
+                &mut out,
+                setup.link,
+                due.0,
+                &[0xFE],
+                None,
+                &mut robot,
+                &mut ledger,
+            )?;
             last_byte = Some(due.0);
             continue;
         }
-        let Some(p) = planner.next_planned() else { break };
+        let Some(p) = planner.next_planned() else {
+            break;
+        };
         match p {
-            Planned::Send { bytes, note, score_at_us, .. } => {
+            Planned::Send {
+                bytes,
+                note,
+                score_at_us,
+                ..
+            } => {
                 if let (Some(id), Some((ch, n, _))) = (note, bytes.note_on()) {
                     ledger.score(id, ch, n, score_at_us);
                     notes_sent += 1;
                 }
                 let t = next.max(last_at);
-                deliver(&mut out, setup.link, t, &bytes, note, &mut robot, &mut ledger)?;
+                deliver(
+                    &mut out,
+                    setup.link,
+                    t,
+                    &bytes,
+                    note,
+                    &mut robot,
+                    &mut ledger,
+                )?;
                 if let Some(l) = lateness.as_mut() {
                     l.push(clock.now_us().saturating_sub(t));
                 }
@@ -407,7 +427,15 @@ where
     if let Out::Midi { .. } = out {
         let t = stopped_at.unwrap_or(last_at).max(last_at);
         for ch in 0..16u8 {
-            deliver(&mut out, setup.link, t, &[0xB0 | ch, 123, 0], None, &mut robot, &mut ledger)?;
+            deliver(
+                &mut out,
+                setup.link,
+                t,
+                &[0xB0 | ch, 123, 0],
+                None,
+                &mut robot,
+                &mut ledger,
+            )?;
         }
         last_at = t;
     }
@@ -423,7 +451,14 @@ where
         ledger.decided(d.t_us, d.event);
     }
     let longest_release = (0..setup.config.range.keys())
-        .map(|k| setup.sim.mechanics.for_key(k as u8).release_delay.as_micros() as u64)
+        .map(|k| {
+            setup
+                .sim
+                .mechanics
+                .for_key(k as u8)
+                .release_delay
+                .as_micros() as u64
+        })
         .max()
         .unwrap_or(0);
     let end = drained + longest_release + 1_000;

@@ -42,8 +42,7 @@ impl Clock for PreciseClock {
     fn wait_until(&mut self, deadline_us: u64) -> u64 {
         let now = self.now_us();
         if deadline_us > now {
-            self.sleeper
-                .sleep(Duration::from_micros(deadline_us - now));
+            self.sleeper.sleep(Duration::from_micros(deadline_us - now));
         }
         let late = self.now_us().saturating_sub(deadline_us);
         self.samples.push(late);

@@ -249,7 +249,7 @@ impl Report {
             o.unison
         ));
         line(format!(
-            "joined                 {}   (the key was already down: no strike of its own)",
+            "joined                 {}   (its key was already held for another note: no strike of its own)",
             o.joined
         ));
         line(format!(

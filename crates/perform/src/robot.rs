@@ -65,9 +65,7 @@ impl Boards for SimBoards {
         self.bus_mut().set_time(t);
     }
     fn ready_at(&self) -> Option<Instant> {
-        Some(Instant::from_micros(
-            self.bus().bus().free_at().as_micros(),
-        ))
+        Some(Instant::from_micros(self.bus().bus().free_at().as_micros()))
     }
 }
 
@@ -81,10 +79,8 @@ pub fn sim_boards(sim: &SimConfig) -> Result<SimBoards, RobotError<orch_boards::
             capacity: MAX_BOARDS,
         },
     ))?;
-    set.init().map_err(|error| RobotError::Board {
-        address: 0,
-        error,
-    })?;
+    set.init()
+        .map_err(|error| RobotError::Board { address: 0, error })?;
     Ok(set)
 }
 

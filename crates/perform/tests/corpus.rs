@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use orch_perform::{
-    perform, song_events, thesis_config, Link, MidiRecording, Played, Planner, Setup, Tempo,
+    perform, song_events, thesis_config, Link, MidiRecording, Planner, Played, Setup, Tempo,
 };
 use orch_seq::{Song, VirtualClock};
 
@@ -98,8 +98,7 @@ fn the_streaming_planner_equals_planning_the_whole_song() {
     let s = setup(true, Link::Direct);
     for (file, song) in corpus() {
         let mut streaming = Planner::new(song_events(&song), s.rules(), 1_000, Tempo::NORMAL);
-        let mut whole =
-            Planner::new(song_events(&song), s.rules(), 1_000, Tempo::NORMAL).eager();
+        let mut whole = Planner::new(song_events(&song), s.rules(), 1_000, Tempo::NORMAL).eager();
         let mut n = 0;
         loop {
             let (a, b) = (streaming.next_planned(), whole.next_planned());
@@ -111,14 +110,8 @@ fn the_streaming_planner_equals_planning_the_whole_song() {
         }
         let (a, b) = (streaming.stats(), whole.stats());
         assert_eq!(
-            orch_perform::PlanStats {
-                peak_queue: 0,
-                ..a
-            },
-            orch_perform::PlanStats {
-                peak_queue: 0,
-                ..b
-            },
+            orch_perform::PlanStats { peak_queue: 0, ..a },
+            orch_perform::PlanStats { peak_queue: 0, ..b },
             "{file}"
         );
         // Bounded lookahead: the queue never holds the whole song.
@@ -151,7 +144,9 @@ fn dbg_one() {
             n += 1;
             eprintln!("{r:?}");
             let k = r.landing.unwrap().key;
-            for p in played.performance.presses.iter().filter(|p| p.key == k && (p.pin_high.as_micros() as i64 - r.score_at_us).abs() < 200_000) {
+            for p in played.performance.presses.iter().filter(|p| {
+                p.key == k && (p.pin_high.as_micros() as i64 - r.score_at_us).abs() < 200_000
+            }) {
                 eprintln!("   {p:?}");
             }
         }
@@ -159,10 +154,17 @@ fn dbg_one() {
     if let Ok(k) = std::env::var("K") {
         let k: u8 = k.parse().unwrap();
         let t0: u64 = std::env::var("T0").unwrap().parse().unwrap();
-        for e in played.performance.edges.iter().filter(|e| e.key == Some(k) && e.time.as_micros().abs_diff(t0) < 150_000) {
+        for e in played
+            .performance
+            .edges
+            .iter()
+            .filter(|e| e.key == Some(k) && e.time.as_micros().abs_diff(t0) < 150_000)
+        {
             eprintln!("edge {} {}", e.time.as_micros(), e.high);
         }
-        for r in played.records.iter().filter(|r| r.landing.is_some_and(|l| l.key == k) && (r.score_at_us as u64).abs_diff(t0) < 150_000) {
+        for r in played.records.iter().filter(|r| {
+            r.landing.is_some_and(|l| l.key == k) && (r.score_at_us as u64).abs_diff(t0) < 150_000
+        }) {
             eprintln!("{r:?}");
         }
     }

@@ -297,21 +297,20 @@ impl Mechanics {
                     sounded: sounds.then(|| since + figures.press_delay),
                     smeared,
                 });
-                let sounding =
-                    if sounds {
-                        let down = since + figures.press_delay;
-                        self.emit(down, key, SoundKind::Down, smeared);
-                        if smeared {
-                            self.stats.smeared_onsets += 1;
-                        } else {
-                            self.stats.clean_onsets += 1;
-                        }
-                        self.last_down[k] = down;
-                        true
+                let sounding = if sounds {
+                    let down = since + figures.press_delay;
+                    self.emit(down, key, SoundKind::Down, smeared);
+                    if smeared {
+                        self.stats.smeared_onsets += 1;
                     } else {
-                        self.stats.short_pulses += 1;
-                        was_sounding
-                    };
+                        self.stats.clean_onsets += 1;
+                    }
+                    self.last_down[k] = down;
+                    true
+                } else {
+                    self.stats.short_pulses += 1;
+                    was_sounding
+                };
                 self.state[k] = if sounding {
                     KeyState::Returning {
                         returns_at: (time + figures.release_delay).max(self.last_down[k]),

@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 use serde::Serialize;
 
 use crate::bus::{BusStats, BusWrite, SimTime};
-use crate::mechanics::{MechanicsStats, SoundEvent, SoundKind, Press};
+use crate::mechanics::{MechanicsStats, Press, SoundEvent, SoundKind};
 
 /// A driven pin of a board changed level (at the completion of the write that changed it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
