@@ -110,6 +110,9 @@ pub struct PlanRules {
     /// The longest a board write may queue on the bus behind the others', µs: kept free
     /// within the late limit.
     pub bus_margin_us: u64,
+    /// How much further to read ahead than the leads need, µs: a link that paces a chord's
+    /// messages as one burst needs to see the whole chord planned.
+    pub extra_lookahead_us: u64,
 }
 
 /// What the planner counted.
@@ -223,6 +226,7 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         let lead = |v: &[u64]| v.iter().copied().max().unwrap_or(0);
         let lookahead = if rules.compensation {
             (lead(&rules.press_lead_us) + rules.restrike_gap_us).max(lead(&rules.release_lead_us))
+                + rules.extra_lookahead_us
         } else {
             0
         } as i64;
@@ -352,6 +356,23 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
             let e = self.source.next()?;
             self.plan(e);
         }
+    }
+
+    /// The final sends at the head of the queue, in order (at least the head, if any): what
+    /// no unread event can change any more.
+    pub fn final_sends(&mut self) -> Vec<&Planned> {
+        if self.peek_time().is_none() {
+            return Vec::new();
+        }
+        let frontier = match self.source.peek() {
+            Some(e) if !self.eager => self.map.wall(e.score_us) - self.lookahead,
+            _ => i64::MAX,
+        };
+        self.queue
+            .iter()
+            .take_while(|((t, _), _)| *t < frontier)
+            .map(|(_, p)| p)
+            .collect()
     }
 
     /// The next send, once it is final; `None` when the song is over.
