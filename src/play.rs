@@ -38,12 +38,19 @@ pub fn load_robot(path: Option<&Path>) -> anyhow::Result<Robot> {
     }
 }
 
+/// The tempo factors `--tempo` takes: a twentieth to twenty times as written.
+const TEMPO_RANGE: std::ops::RangeInclusive<f64> = 0.05..=20.0;
+
 fn tempo(factor: f64) -> anyhow::Result<Tempo> {
-    Tempo::new(factor).ok_or_else(|| {
-        bad_input(format!(
-            "--tempo {factor}: give a factor above 0, such as 0.5 or 1.25"
-        ))
-    })
+    Tempo::new(factor)
+        .filter(|t| TEMPO_RANGE.contains(&t.get()))
+        .ok_or_else(|| {
+            bad_input(format!(
+                "--tempo {factor}: give a factor from {} to {}, such as 0.5 or 1.25",
+                TEMPO_RANGE.start(),
+                TEMPO_RANGE.end()
+            ))
+        })
 }
 
 /// How `robot` plays, with or without compensation, at `tempo`, on this host.

@@ -350,10 +350,13 @@ where
         } else {
             next = burst_at;
         }
-        // Keep the line alive through long silences (generated as the time comes, never
-        // stored: memory follows the events, not the length of a silence).
+        // Keep the line alive through long silences while keys are down or waiting, so the
+        // robot's watchdog does not cut a held chord (generated as the time comes, never
+        // stored, and only while something could be cut: memory and time follow the events,
+        // never the length of a silence).
+        let busy = robot.interpreter().next_deadline().is_some();
         let due = match last_byte {
-            Some(b) if next > b + KEEP_ALIVE_US => (b + KEEP_ALIVE_US, true),
+            Some(b) if busy && next > b + KEEP_ALIVE_US => (b + KEEP_ALIVE_US, true),
             _ => (next, false),
         };
         if let Some(l) = live.as_deref_mut() {
