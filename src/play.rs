@@ -57,7 +57,11 @@ fn tempo(factor: f64) -> anyhow::Result<Tempo> {
 pub fn setup(robot: &Robot, compensation: bool, tempo: Tempo) -> Setup {
     Setup {
         config: robot.config,
-        sim: robot.sim_config(),
+        // The report needs the presses and the figures, not every write and edge.
+        sim: orch_sim::SimConfig {
+            keep: orch_sim::Keep::Presses,
+            ..robot.sim_config()
+        },
         compensation,
         tempo,
         link: Link::Direct,
@@ -98,7 +102,8 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
     } else {
         play_live(song.clone(), &setup, args)?
     };
-    let report = played.report(uncompensated(&song, &setup)?);
+    // The comparison without compensation is `orch analyze`'s: a play renders once.
+    let report = played.report(None);
     print_report(&report, args.json, &args.file)
 }
 

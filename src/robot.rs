@@ -55,6 +55,7 @@ impl Robot {
             clock: self.clock,
             boards: self.config.layout.boards[..self.boards].to_vec(),
             mechanics: self.mechanics.clone(),
+            keep: orch_sim::Keep::Everything,
         }
     }
 

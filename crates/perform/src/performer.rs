@@ -5,7 +5,7 @@ use std::sync::{Arc, Mutex};
 
 use orch_core::{Config, Stats};
 use orch_seq::Clock;
-use orch_sim::{Performance, SimConfig, SoundKind};
+use orch_sim::{Performance, SimConfig};
 
 use crate::ledger::{Ledger, NoteRecord, Outcome};
 use crate::link::{DinWire, Link, MidiOut, RunningStatus};
@@ -219,12 +219,7 @@ impl Played {
         Report {
             notes: self.records.len() as u64,
             outcomes,
-            strikes: self
-                .performance
-                .sounds
-                .iter()
-                .filter(|e| e.kind == SoundKind::Down)
-                .count() as u64,
+            strikes: m.clean_onsets + m.smeared_onsets,
             unmatched,
             folded: folded_by_octaves.values().sum(),
             folded_by_octaves,
@@ -470,7 +465,7 @@ where
         Some(t) => robot.stop(t.max(wire_end)).map_err(robot_err)?,
         None => robot.drain(last_at.max(wire_end) + 1).map_err(robot_err)?,
     };
-    for d in robot.take_decided() {
+    for d in robot.drain_decided() {
         ledger.decided(d.t_us, d.event);
     }
     let longest_release = (0..setup.config.range.keys())
@@ -529,7 +524,7 @@ fn deliver<M: MidiOut>(
             }
         }
     }
-    for d in robot.take_decided() {
+    for d in robot.drain_decided() {
         ledger.decided(d.t_us, d.event);
     }
     Ok(())

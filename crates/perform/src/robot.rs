@@ -129,6 +129,11 @@ impl<B: Boards> LocalRobot<B> {
         std::mem::take(&mut self.decided)
     }
 
+    /// Note decisions since the last call, in order, without a new allocation.
+    pub fn drain_decided(&mut self) -> std::vec::Drain<'_, Decided> {
+        self.decided.drain(..)
+    }
+
     /// Feeds bytes arriving at `t_us` (never earlier than the previous ones).
     pub fn feed(&mut self, t_us: u64, bytes: &[u8]) -> Result<(), RobotError<B::Error>> {
         if self.batch != Some(t_us) {

@@ -57,6 +57,9 @@ impl TimeMap {
     /// The wall time (µs) at which score time `score` plays, rounded to the µs. Before the
     /// anchor it extrapolates at the present tempo.
     pub fn wall(&self, score: u64) -> i64 {
+        if self.tempo.0 == 1.0 && score < i64::MAX as u64 / 4 {
+            return self.wall + (score as i64 - self.score as i64);
+        }
         let d = score as f64 - self.score as f64;
         let w = self.wall as f64 + d / self.tempo.0;
         if w >= i64::MAX as f64 / 2.0 {

@@ -241,6 +241,7 @@ pub struct VirtualBus {
     free_at: SimTime,
     stats: BusStats,
     log: Vec<BusWrite>,
+    keep_log: bool,
     changes: Vec<PinChange>,
     last: Option<(SimTime, SimTime)>,
 }
@@ -255,6 +256,7 @@ impl VirtualBus {
             free_at: SimTime::ZERO,
             stats: BusStats::default(),
             log: Vec::new(),
+            keep_log: true,
             changes: Vec::new(),
             last: None,
         }
@@ -315,6 +317,21 @@ impl VirtualBus {
     /// Every acknowledged write frame, oldest first.
     pub fn log(&self) -> &[BusWrite] {
         &self.log
+    }
+
+    /// Forgets the write log (the counters stay): for long runs that keep only figures.
+    pub fn clear_log(&mut self) {
+        self.log.clear();
+    }
+
+    /// Whether to keep the write log (on by default; off, only the counters are kept).
+    pub fn keep_log(&mut self, keep: bool) {
+        self.keep_log = keep;
+    }
+
+    /// Hands the pin changes since the last call to `f`, oldest first, and forgets them.
+    pub fn drain_pin_changes(&mut self, f: impl FnMut(PinChange)) {
+        self.changes.drain(..).for_each(f);
     }
 
     /// Takes the driven-pin changes recorded since the last call, oldest first. Their times
@@ -397,6 +414,33 @@ impl I2c<SevenBitAddress> for VirtualBus {
             return Err(BusError::AddressNack { address });
         };
 
+        if let [Operation::Write(data)] = operations {
+            // The common case, a driver's single write: no allocation unless it is logged.
+            let data: &[u8] = data;
+            let (start, end) =
+                self.occupy(Self::bits_for_frames(&[data.len()]), 1 + data.len() as u64);
+            let before = self.devices[index].driven();
+            self.devices[index].write_frame(data);
+            let after = self.devices[index].driven();
+            if self.keep_log {
+                self.log.push(BusWrite {
+                    start,
+                    end,
+                    address,
+                    bytes: data.to_vec(),
+                    driven: after,
+                });
+            }
+            if before != after {
+                self.changes.push(PinChange {
+                    time: end,
+                    address,
+                    before,
+                    after,
+                });
+            }
+            return Ok(());
+        }
         let groups = frames(operations);
         let lengths: Vec<usize> = groups
             .iter()
@@ -435,6 +479,9 @@ impl I2c<SevenBitAddress> for VirtualBus {
         }
         let after = self.devices[index].driven();
         for bytes in writes {
+            if !self.keep_log {
+                continue;
+            }
             self.log.push(BusWrite {
                 start,
                 end,

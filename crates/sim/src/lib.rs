@@ -52,4 +52,4 @@ pub use mechanics::{
 };
 pub use pca9555::Pca9555;
 pub use recorder::{Performance, PinEdge, Recorder, Summary};
-pub use robot::{SimConfig, VirtualRobot};
+pub use robot::{Keep, SimConfig, VirtualRobot};

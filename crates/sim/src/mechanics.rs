@@ -182,6 +182,7 @@ pub struct Mechanics {
     last_down: Vec<SimTime>,
     events: Vec<SoundEvent>,
     presses: Vec<Press>,
+    keep_sounds: bool,
     stats: MechanicsStats,
 }
 
@@ -194,6 +195,7 @@ impl Mechanics {
             last_down: vec![SimTime::ZERO; keys],
             events: Vec::new(),
             presses: Vec::new(),
+            keep_sounds: true,
             stats: MechanicsStats::default(),
         }
     }
@@ -237,7 +239,16 @@ impl Mechanics {
         )
     }
 
+    /// Whether to keep the sound events ([`events`](Self::events), [`finish`](Self::finish)):
+    /// off, only the presses and the counters are kept.
+    pub fn keep_sounds(&mut self, keep: bool) {
+        self.keep_sounds = keep;
+    }
+
     fn emit(&mut self, time: SimTime, key: u8, kind: SoundKind, smeared: bool) {
+        if !self.keep_sounds {
+            return;
+        }
         self.events.push(SoundEvent {
             time,
             key,

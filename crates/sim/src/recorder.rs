@@ -132,6 +132,8 @@ impl fmt::Display for Performance {
 pub struct Recorder {
     writes: Vec<BusWrite>,
     edges: Vec<PinEdge>,
+    write_count: u64,
+    edge_count: u64,
 }
 
 impl Recorder {
@@ -143,11 +145,23 @@ impl Recorder {
     /// Records a bus write.
     pub fn record_write(&mut self, write: BusWrite) {
         self.writes.push(write);
+        self.write_count += 1;
     }
 
     /// Records a pin edge.
     pub fn record_edge(&mut self, edge: PinEdge) {
         self.edges.push(edge);
+        self.edge_count += 1;
+    }
+
+    /// Counts writes without keeping them.
+    pub fn count_writes(&mut self, n: usize) {
+        self.write_count += n as u64;
+    }
+
+    /// Counts edges without keeping them.
+    pub fn count_edges(&mut self, n: usize) {
+        self.edge_count += n as u64;
     }
 
     /// The writes so far.
@@ -172,8 +186,8 @@ impl Recorder {
     ) -> Performance {
         let summary = Summary {
             end,
-            writes: self.writes.len() as u64,
-            edges: self.edges.len() as u64,
+            writes: self.write_count,
+            edges: self.edge_count,
             bus,
             mechanics,
         };

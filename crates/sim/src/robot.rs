@@ -29,6 +29,20 @@ pub struct SimConfig {
     pub boards: Vec<BoardSpan>,
     /// The keys' mechanics: a default and per-key overrides.
     pub mechanics: MechanicsConfig,
+    /// What to keep: every write, edge and sound ([`Keep::Everything`]), or only the presses
+    /// and the figures ([`Keep::Presses`], memory that follows the notes, a fraction of it).
+    pub keep: Keep,
+}
+
+/// What a [`VirtualRobot`] keeps of a performance.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Keep {
+    /// Every bus write, pin edge and sound, and every press.
+    #[default]
+    Everything,
+    /// Every press (each with its sound) and the figures; no writes, edges or sounds (the
+    /// summary's `writes` then counts every transaction, `edges` every edge).
+    Presses,
 }
 
 impl SimConfig {
@@ -39,6 +53,7 @@ impl SimConfig {
             clock: BusClock::THESIS,
             boards: Layout::THESIS.boards.to_vec(),
             mechanics: MechanicsConfig::default(),
+            keep: Keep::Everything,
         }
     }
 
@@ -69,7 +84,9 @@ pub struct VirtualRobot {
     pins: Vec<[Option<u8>; 16]>,
     mechanics: Mechanics,
     recorder: Recorder,
+    /// Writes of the bus log already recorded (with [`Keep::Presses`]: transactions counted).
     log_seen: usize,
+    scratch: Vec<crate::bus::PinChange>,
 }
 
 impl VirtualRobot {
@@ -90,7 +107,9 @@ impl VirtualRobot {
             first_key += span.keys as usize;
             pins.push(map);
         }
-        let mechanics = Mechanics::new(first_key, &config.mechanics);
+        bus.keep_log(config.keep == Keep::Everything);
+        let mut mechanics = Mechanics::new(first_key, &config.mechanics);
+        mechanics.keep_sounds(config.keep == Keep::Everything);
         Self {
             config,
             bus,
@@ -98,6 +117,7 @@ impl VirtualRobot {
             mechanics,
             recorder: Recorder::new(),
             log_seen: 0,
+            scratch: Vec::new(),
         }
     }
 
@@ -164,11 +184,21 @@ impl VirtualRobot {
 
     /// Moves what happened on the bus since the last sync into the recorder and the mechanics.
     pub fn sync(&mut self) {
-        for w in &self.bus.log()[self.log_seen..] {
-            self.recorder.record_write(w.clone());
+        let keep = self.config.keep == Keep::Everything;
+        if keep {
+            for w in &self.bus.log()[self.log_seen..] {
+                self.recorder.record_write(w.clone());
+            }
+            self.log_seen = self.bus.log().len();
+        } else {
+            let tx = self.bus.stats().transactions;
+            self.recorder
+                .count_writes((tx - self.log_seen as u64) as usize);
+            self.log_seen = tx as usize;
         }
-        self.log_seen = self.bus.log().len();
-        for change in self.bus.take_pin_changes() {
+        let mut changes = core::mem::take(&mut self.scratch);
+        self.bus.drain_pin_changes(|c| changes.push(c));
+        for change in changes.drain(..) {
             let board = self
                 .config
                 .boards
@@ -181,6 +211,13 @@ impl VirtualRobot {
                 }
                 let high = change.after & (1 << bit) != 0;
                 let key = board.and_then(|b| self.pins[b][bit as usize]);
+                if !keep {
+                    self.recorder.count_edges(1);
+                    if let Some(key) = key {
+                        self.mechanics.edge(change.time, key, high);
+                    }
+                    continue;
+                }
                 self.recorder.record_edge(PinEdge {
                     time: change.time,
                     board: board.map_or(u8::MAX, |b| b as u8),
@@ -194,6 +231,7 @@ impl VirtualRobot {
                 }
             }
         }
+        self.scratch = changes;
     }
 
     /// Ends the performance at `end` (or when the bus falls idle, if later): pins still high
