@@ -7,37 +7,59 @@
 
 use orch_atmega16_hil::*;
 
-/// Plays `stream` at wire pacing into a booted robot and into orch-core on the host.
-fn play(stream: &[u8]) -> (Hil, HostRobot, usize) {
+/// The latest a press or release may reach its board after the host made it. A write takes
+/// 456 µs at 83.33 kHz, but the firmware runs orch-core's guard timers by scanning all 61
+/// keys (10 000–20 000 cycles, 1.3–2.7 ms at 8 MHz) and under a full-rate flood bytes and
+/// writes wait behind such a scan; 6 ms is 19 DIN bytes.
+const MAX_LATE_US: u64 = 6_000;
+
+/// Plays `stream` into a booted robot, one byte every `pace_us`, and the same bytes at the
+/// same times into orch-core on the host; runs both `tail_us` past the last byte.
+fn play_paced(stream: &[u8], pace_us: u64, tail_us: u64) -> (Hil, HostRobot, usize) {
     let mut hil = Hil::new();
     hil.boot();
     let from = hil.bus.borrow().log.len();
-    hil.send(stream);
-    hil.run_us(20_000);
+    hil.send_paced(stream, pace_us);
+    hil.run_us(tail_us);
     let mut host = HostRobot::new();
     for (&t, &b) in hil.arrivals_us().iter().zip(stream) {
         host.feed(b, t);
     }
-    host.tick(hil.now_us());
+    host.advance_to(hil.now_us());
     (hil, host, from)
 }
 
-fn check_against_host(stream: &[u8]) -> (Hil, HostRobot) {
-    let (hil, host, from) = play(stream);
+/// The firmware made exactly the host's board writes, in order, and every press and release
+/// reached its board in time; thru equals the input. Returns the match.
+fn assert_same_as_host(hil: &Hil, host: &HostRobot, from: usize, stream: &[u8]) -> EventMatch {
     assert_eq!(hil.thru, stream, "MIDI thru must equal the input");
-    let writes = hil.bus.borrow().output_writes(from);
-    // Running-status messages (640 µs on the wire, 704 in simavr) arrive faster than the
-    // firmware interprets one (~330 µs) and writes its board (~400 µs): it then takes both
-    // waiting messages before it writes, and one intermediate state is never written.
-    match same_writes_coalesced(&writes, &host.writes()) {
-        Ok(skipped) => println!(
-            "{} host writes, {} coalesced",
-            host.writes().iter().map(Vec::len).sum::<usize>(),
-            skipped
-        ),
-        Err(e) => panic!("{e}"),
-    }
-    assert_eq!(hil.outputs(), host.outputs(), "final board outputs");
+    let bus = hil.bus.borrow();
+    let fw = bus.timed_output_writes(from);
+    let m =
+        same_key_events(&fw, &host.boards.writes, MAX_LATE_US).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        per_board(&fw),
+        host.writes(),
+        "the same board writes as the host"
+    );
+    assert_eq!(bus.outputs(), host.outputs(), "final board outputs");
+    println!(
+        "{} host writes; {} presses and {} releases on the boards, at most {} µs after the host",
+        host.boards.writes.len(),
+        m.presses,
+        m.releases,
+        m.max_late_us
+    );
+    m
+}
+
+fn check_against_host(stream: &[u8]) -> (Hil, HostRobot) {
+    // Back to back on simavr's wire (a byte every 352 µs: its UART counts a parity bit that
+    // 8N1 does not have; fed faster, it hands the firmware two bytes at once now and then).
+    // Then 100 ms: past the guard's shortest strike (20 ms) and rest (60 ms), so no timer of
+    // the host's fires while the firmware's write of it is still on the bus.
+    let (hil, host, from) = play_paced(stream, SIM_BYTE_US, 100_000);
+    assert_same_as_host(&hil, &host, from, stream);
     (hil, host)
 }
 
@@ -243,11 +265,11 @@ fn stream_file(name: &str) -> (Hil, Vec<u8>, usize) {
     let start = hil.now_us();
     let mut next = start;
     for &(t, b) in &timed {
-        // Wire speed: at its time, or right after the byte before it.
+        // Wire speed (simavr's): at its time, or right after the byte before it.
         let at = (start + t).max(next);
         hil.run_until(at * (F_CPU / 1_000_000));
         hil.put(b);
-        next = at + BYTE_US;
+        next = at + SIM_BYTE_US;
     }
     let bytes: Vec<u8> = timed.iter().map(|&(_, b)| b).collect();
     (hil, bytes, from)
@@ -287,19 +309,92 @@ fn a_whole_midi_file_at_wire_speed() {
     let longest_ms = longest / (F_CPU / 1000);
     assert!(longest_ms <= 10_010, "a key was held {longest_ms} ms");
 
-    // And the same writes as orch-core on the host.
+    // And the same writes as orch-core on the host: every press and release, in time.
     let mut host = HostRobot::new();
     for (&t, &b) in hil.arrivals_us().iter().zip(&bytes) {
         host.feed(b, t);
     }
-    host.tick(hil.now_us());
-    assert_eq!(bus.output_writes(from), host.writes());
+    host.advance_to(hil.now_us());
+    assert_same_as_host(&hil, &host, from, &bytes);
     println!(
         "m21-test06.mid: {} bytes, {} board writes, longest key {} ms, simulated {:.1} s in {:.1?}",
         bytes.len(),
         writes,
         longest_ms,
         hil.now_us() as f64 / 1e6,
+        t0.elapsed()
+    );
+}
+
+/// A DIN line at full rate for `seconds`: running status throughout; first sweeps of
+/// Note-On/Note-Off pairs over all 61 keys (what once made the firmware reset after 125 ms),
+/// then notes on random keys, half of them Note-Offs (velocity 0): re-strikes inside the
+/// guard's rest, presses shorter than its shortest strike, chords past its power budget.
+fn flood(seconds: u64) -> Vec<u8> {
+    let n = (seconds * 1_000_000 / SIM_BYTE_US) as usize;
+    let mut s = vec![0x90];
+    while s.len() < n / 3 {
+        for k in 36..=96u8 {
+            s.extend([k, 100, k, 0]);
+        }
+    }
+    let mut x = 0x2545_f491_u32;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        x
+    };
+    while s.len() + 1 < n {
+        let r = next();
+        let key = 36 + (r % 61) as u8;
+        let velocity = if r >> 16 & 1 == 0 {
+            0
+        } else {
+            1 + (r >> 8) as u8 % 127
+        };
+        s.extend([key, velocity]);
+    }
+    s
+}
+
+#[test]
+fn a_full_rate_din_line_loses_no_press_or_release() {
+    // Back to back at the fastest rate simavr's UART delivers (a byte every 352 µs), for
+    // four seconds.
+    let stream = flood(4);
+    let t0 = std::time::Instant::now();
+    // Then 4.5 s of silence: the guard's watchdog (4 s) lets every key go, on both.
+    let (mut hil, host, from) = play_paced(&stream, SIM_BYTE_US, 4_500_000);
+    let m = assert_same_as_host(&hil, &host, from, &stream);
+    // The power-up initialisation ran once: no reset on the way.
+    let inits = hil
+        .bus
+        .borrow()
+        .log
+        .iter()
+        .filter(|t| t.bytes[0] == 6)
+        .count();
+    assert_eq!(
+        inits, 4,
+        "the boards were initialised again: the firmware reset"
+    );
+    assert!(
+        m.presses > 1000 && m.releases > 1000,
+        "a flood that presses keys ({m:?})"
+    );
+    let stack = {
+        hil.run_us(300_000);
+        hil.stack_high_water()
+    };
+    println!(
+        "flood: {} bytes in {:.1} s simulated, {} presses and {} releases, latest {} µs after the host; deepest stack {} bytes; {:.1?}",
+        stream.len(),
+        stream.len() as f64 * SIM_BYTE_US as f64 / 1e6,
+        m.presses,
+        m.releases,
+        m.max_late_us,
+        stack,
         t0.elapsed()
     );
 }
