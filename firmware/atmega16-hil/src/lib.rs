@@ -36,6 +36,9 @@ pub struct Transaction {
     pub board: usize,
     /// The bytes after the address byte.
     pub bytes: Vec<u8>,
+    /// CPU cycle of the START (simavr sends it with the address byte, taking no bus time
+    /// for either).
+    pub start_cycle: u64,
     /// CPU cycle of the STOP condition.
     pub stop_cycle: u64,
 }
@@ -51,6 +54,7 @@ pub struct Pca9555 {
     command_seen: bool,
     reading: bool,
     bytes: Vec<u8>,
+    started: u64,
     /// When set, the board acknowledges nothing (unpowered, missing, or a dead bus).
     pub nack: bool,
 }
@@ -65,6 +69,7 @@ impl Default for Pca9555 {
             command_seen: false,
             reading: false,
             bytes: Vec::new(),
+            started: 0,
             nack: false,
         }
     }
@@ -156,9 +161,11 @@ impl TwiSlave for Slave {
             b.active = false;
             if was && !b.reading {
                 let bytes = std::mem::take(&mut b.bytes);
+                let start_cycle = bus.boards[i].started;
                 bus.log.push(Transaction {
                     board: i,
                     bytes,
+                    start_cycle,
                     stop_cycle: now,
                 });
             }
@@ -176,13 +183,16 @@ impl TwiSlave for Slave {
             if b.active && !b.reading && !b.bytes.is_empty() {
                 // A repeated START ends a write part.
                 let bytes = std::mem::take(&mut b.bytes);
+                let start_cycle = b.started;
                 bus.log.push(Transaction {
                     board: i,
                     bytes,
+                    start_cycle,
                     stop_cycle: now,
                 });
             }
             let b = &mut bus.boards[i];
+            b.started = now;
             b.active = true;
             b.reading = p.addr & 1 == 1;
             if !b.reading {

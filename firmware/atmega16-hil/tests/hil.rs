@@ -399,6 +399,19 @@ fn a_full_rate_din_line_loses_no_press_or_release() {
     );
 }
 
+/// The firmware's bus clock: `TWI_HZ` in firmware/atmega16/src/twi.rs (the one place).
+fn twi_hz() -> u64 {
+    let src = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../atmega16/src/twi.rs"
+    ))
+    .unwrap();
+    src.lines()
+        .find_map(|l| l.strip_prefix("pub const TWI_HZ: u32 = "))
+        .and_then(|v| v.trim_end_matches(';').replace('_', "").parse().ok())
+        .expect("pub const TWI_HZ: u32 = …; in twi.rs")
+}
+
 /// Figures for the README: run with `--nocapture`.
 #[test]
 fn figures() {
@@ -421,12 +434,14 @@ fn figures() {
 
     let mut hil = Hil::new();
     hil.boot();
-    // Cycles per note message: instructions run while the firmware works on it (PD4: decode
-    // and interpret, PD5: write the boards, PD2: the receive interrupt), for Note-On and
-    // Note-Off messages with their own status byte and with running status.
+    // Cycles per note message: instructions run while the firmware works on it (PD4: decode,
+    // interpret and queue the write; PD2: the receive interrupt), and in the TWI interrupt
+    // (PD5) for its board write, for Note-On and Note-Off messages with their own status
+    // byte and with running status.
     let mut interp = Vec::new();
-    let mut bus_cycles = Vec::new();
+    let mut twi_cycles = Vec::new();
     let mut latency = Vec::new();
+    let mut overhead = Vec::new();
     let msgs: [&[u8]; 6] = [
         &[0x90, 60, 100],
         &[0x90, 64, 100],
@@ -435,11 +450,11 @@ fn figures() {
         &[64, 0],
         &[67, 0],
     ];
+    // One SCL period in CPU cycles, at the firmware's TWI_HZ.
+    let bit_cycles = F_CPU as f64 / twi_hz() as f64;
     for m in msgs {
         let log_from = hil.bus.borrow().log.len();
-        let (mut work, mut flush) = (0u64, 0u64);
-        // Runs the simulator for `us` µs, counting the cycles spent interpreting (PD4, PD2)
-        // and writing the boards (PD5).
+        let (mut work, mut twi) = (0u64, 0u64);
         let mut run_for = |hil: &mut Hil, us: u64| {
             let end = hil.cycles.get() + us * 8;
             while hil.cycles.get() < end {
@@ -448,7 +463,7 @@ fn figures() {
                     work += n;
                 }
                 if hil.pin('D', 5) {
-                    flush += n;
+                    twi += n;
                 }
             }
         };
@@ -456,65 +471,54 @@ fn figures() {
         for &b in m {
             last_put = hil.cycles.get();
             hil.put(b);
-            run_for(&mut hil, BYTE_US);
+            run_for(&mut hil, SIM_BYTE_US);
         }
         run_for(&mut hil, 3_000);
         interp.push(work);
-        bus_cycles.push(flush);
+        twi_cycles.push(twi);
         // From the end of the last byte's stop bit (when simavr raises receive-complete) to
         // the STOP of the board write.
         let rx_done = last_put + SIM_BYTE_US * 8;
         let bus = hil.bus.borrow();
-        let stop = bus.log[log_from..]
+        let t = bus.log[log_from..]
             .iter()
             .find(|t| t.bytes[0] == 2)
-            .expect("the message made a board write")
-            .stop_cycle;
-        latency.push((stop - rx_done) as f64 / 8.0);
+            .expect("the message made a board write");
+        latency.push((t.stop_cycle - rx_done) as f64 / 8.0);
+        // simavr's TWI takes 9 bit times for each data byte and none for START and the
+        // address: what is left is the firmware's (interpreting, and its interrupts).
+        overhead.push((t.stop_cycle - rx_done) as f64 / 8.0 - 27.0 * bit_cycles / 8.0);
     }
     hil.drain_thru();
 
-    // The deepest stack, after a busy stretch: a whole file.
-    let (mut busy, _, _) = {
-        let data = std::fs::read("/work/shared/midi/m21-test06.mid")
-            .or_else(|_| {
-                std::fs::read(concat!(
-                    env!("CARGO_MANIFEST_DIR"),
-                    "/../../../shared/midi/m21-test06.mid"
-                ))
-            })
-            .unwrap();
-        let timed = smf_to_wire(&data);
-        let mut h = Hil::new();
-        h.boot();
-        let start = h.now_us();
-        let mut next = start;
-        for &(t, b) in timed.iter().take(400) {
-            let at = (start + t).max(next);
-            h.run_until(at * 8);
-            h.put(b);
-            next = at + BYTE_US;
-        }
-        (h, (), ())
-    };
-    busy.run_us(600_000); // the firmware publishes its stack depth every 250 ms when idle
+    // The deepest stack, after a busy stretch: a full-rate flood.
+    let stream = flood(1);
+    let mut busy = Hil::new();
+    busy.boot();
+    busy.send_paced(&stream, SIM_BYTE_US);
+    busy.run_us(600_000); // the firmware publishes its stack depth every 250 ms
     let stack = busy.stack_high_water().max(hil.stack_high_water());
 
     let avg = |v: &[u64]| v.iter().sum::<u64>() as f64 / v.len() as f64;
-    let (lmin, lmax) = latency
-        .iter()
-        .fold((f64::MAX, 0f64), |(a, b), &x| (a.min(x), b.max(x)));
+    let span = |v: &[f64]| {
+        v.iter()
+            .fold((f64::MAX, 0f64), |(a, b), &x| (a.min(x), b.max(x)))
+    };
+    let (lmin, lmax) = span(&latency);
+    let (omin, omax) = span(&overhead);
+    // On a real bus the write is START + 4 bytes × 9 bits + STOP: about 38 bit times.
+    let real_write = 38.0 * bit_cycles / 8.0;
     println!("\n== ATmega16 firmware figures (simavr, 8 MHz) ==");
     println!("ELF: {}", elf.display());
     println!(
-        "flash: {} bytes (.text {} + .data {}) of 16384 ({:.0}%); the thesis: a 5 KB hex file (about 1.8 KB of code), ~550 lines of C",
+        "flash: {} bytes (.text {} + .data {}) of 16384 ({:.0}%); the thesis: 1846 bytes",
         flash_text + data,
         flash_text,
         data,
         (flash_text + data) as f64 / 163.84
     );
     println!(
-        "RAM: {} bytes static (.data {} + .bss {}, the interpreter's ~600 in .data) + {} bytes deepest stack seen = {} of 1024",
+        "RAM: {} bytes static (.data {} + .bss {}) + {} bytes deepest stack seen = {} of 1024; the thesis: 145 bytes static",
         data + bss,
         data,
         bss,
@@ -522,20 +526,27 @@ fn figures() {
         data + bss + stack as u64
     );
     println!(
-        "CPU cycles per note message (decode + interpret + receive interrupts): {:?}, mean {:.0} ({:.0} µs at 8 MHz)",
+        "CPU cycles per note message (decode + interpret + queue + receive interrupts): {:?}, mean {:.0} ({:.0} µs at 8 MHz)",
         interp,
         avg(&interp),
         avg(&interp) / 8.0
     );
     println!(
-        "CPU cycles writing the board (busy-waiting on the TWI): {:?}, mean {:.0} ({:.0} µs)",
-        bus_cycles,
-        avg(&bus_cycles),
-        avg(&bus_cycles) / 8.0
+        "CPU cycles in the TWI interrupt per board write: {:?}, mean {:.0} ({:.0} µs)",
+        twi_cycles,
+        avg(&twi_cycles),
+        avg(&twi_cycles) / 8.0
     );
     println!(
-        "stop bit of the last MIDI byte -> TWI STOP of the board write: {:.0}..{:.0} µs (one MIDI byte is 320 µs; simavr's TWI takes 324 µs for the 3 data bytes and 0 for START + address: real 83.33 kHz adds ~130 µs)",
-        lmin, lmax
+        "last MIDI stop bit -> TWI STOP of the write: {lmin:.0}..{lmax:.0} µs in simavr at {:.2} kHz; of which not bus time: {omin:.0}..{omax:.0} µs",
+        twi_hz() as f64 / 1000.0
+    );
+    println!(
+        "  on a real bus (the write = 38 bit times = {real_write:.0} µs): {:.0}..{:.0} µs = {:.2}..{:.2} × the write; the thesis: 775..3420 µs at 83.33 kHz",
+        omin + real_write,
+        omax + real_write,
+        (omin + real_write) / real_write,
+        (omax + real_write) / real_write
     );
     for (m, l) in msgs.iter().zip(&latency) {
         println!("  {m:02x?}: {l:.0} µs");

@@ -76,8 +76,11 @@ fn main() -> ! {
     dp.CPU.mcucsr.write(|w| unsafe { w.bits(mcucsr) });
     dp.CPU.mcucsr.write(|w| unsafe { w.bits(mcucsr) });
 
-    // Watchdog on, about 0.52 s (WDP2 | WDP0).
+    // Watchdog on, about 0.52 s (WDP2 | WDP0). Through the timed sequence (WDTOE | WDE, then
+    // the value within four cycles): the ATmega16 takes the prescaler either way, but simavr
+    // keeps WDP at 0 (16 ms) unless it comes this way.
     avr_device::asm::wdr();
+    dp.WDT.wdtcr.write(|w| unsafe { w.bits((1 << 4) | (1 << 3)) });
     dp.WDT.wdtcr.write(|w| unsafe { w.bits((1 << 3) | 0b101) });
 
     // The thesis's MOSFET port: all outputs, all low.
