@@ -638,3 +638,35 @@ pub fn smf_to_wire(data: &[u8]) -> Vec<(u64, u8)> {
     }
     out
 }
+
+/// A DIN line at full rate for `seconds`: running status throughout; first sweeps of
+/// Note-On/Note-Off pairs over all 61 keys (what once made the firmware reset after 125 ms),
+/// then notes on random keys, half of them Note-Offs (velocity 0): re-strikes inside the
+/// guard's rest, presses shorter than its shortest strike, chords past its power budget.
+pub fn flood_stream(seconds: u64) -> Vec<u8> {
+    let n = (seconds * 1_000_000 / SIM_BYTE_US) as usize;
+    let mut s = vec![0x90];
+    while s.len() < n / 3 {
+        for k in 36..=96u8 {
+            s.extend([k, 100, k, 0]);
+        }
+    }
+    let mut x = 0x2545_f491_u32;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        x
+    };
+    while s.len() + 1 < n {
+        let r = next();
+        let key = 36 + (r % 61) as u8;
+        let velocity = if r >> 16 & 1 == 0 {
+            0
+        } else {
+            1 + (r >> 8) as u8 % 127
+        };
+        s.extend([key, velocity]);
+    }
+    s
+}

@@ -103,6 +103,10 @@ fn main() -> ! {
     }
     let mut retry_at = RETRY_US;
     let mut publish_at = 0u64;
+    // The guard's next deadline, asked again after every call that may move it: the loop
+    // compares times with it, and asks orch-core (a few hundred cycles) only after feeding
+    // a byte or running a timer, once the write it made is on its way.
+    let mut deadline = u64::MAX;
 
     // SAFETY: everything the handlers use is set up.
     unsafe { avr_device::interrupt::enable() };
@@ -116,20 +120,21 @@ fn main() -> ! {
             // The guard's timers that fall before this byte first, each at its own time,
             // then the byte at its arrival time: the same steps, at the same times, as
             // orch-core on a host fed the same bytes.
-            while let Some(d) = robot.next_deadline().filter(|d| d.as_micros() <= at) {
-                robot.tick(d);
-                let _ = robot.flush(&mut Boards);
+            while deadline <= at {
+                tick(robot, deadline);
+                deadline = next_deadline(robot);
             }
             robot.feed(byte, Instant::from_micros(at));
-            let _ = robot.flush(&mut Boards);
+            flush(robot);
+            deadline = next_deadline(robot);
             probe::work(false);
             continue;
         }
         let now = clock::now_us();
-        if let Some(d) = robot.next_deadline().filter(|d| d.as_micros() <= now) {
+        if deadline <= now {
             probe::work(true);
-            robot.tick(d);
-            let _ = robot.flush(&mut Boards);
+            tick(robot, deadline);
+            deadline = next_deadline(robot);
             probe::work(false);
         }
         let failed = twi::failed();
@@ -148,6 +153,28 @@ fn main() -> ! {
             publish_at = now + 250_000;
         }
     }
+}
+
+/// Runs the guard's timers at `at` and queues what they changed.
+#[inline(never)]
+fn tick(robot: &mut Robot, at: u64) {
+    robot.tick(Instant::from_micros(at));
+    flush(robot);
+}
+
+/// Queues the boards that changed (orch-core's flush visits every board; most bytes change
+/// none).
+#[inline(never)]
+fn flush(robot: &mut Robot) {
+    let frame = robot.frame();
+    if (0..4).any(|b| frame.is_dirty(b)) {
+        let _ = robot.flush(&mut Boards);
+    }
+}
+
+#[inline(always)]
+fn next_deadline(robot: &Robot) -> u64 {
+    robot.next_deadline().map_or(u64::MAX, Instant::as_micros)
 }
 
 #[panic_handler]
