@@ -534,7 +534,7 @@ pub fn key_events(writes: &[TimedWrite]) -> Vec<KeyEvent> {
 }
 
 /// How the firmware's presses and releases compare with the host's.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct EventMatch {
     /// Presses matched.
     pub presses: usize,
@@ -542,6 +542,18 @@ pub struct EventMatch {
     pub releases: usize,
     /// The latest a firmware event came after the host's, in µs.
     pub max_late_us: u64,
+    /// How late each firmware event came, in µs, sorted.
+    pub late_us: Vec<u64>,
+}
+
+impl EventMatch {
+    /// The lateness below which `percent` % of the events came.
+    pub fn percentile(&self, percent: usize) -> u64 {
+        if self.late_us.is_empty() {
+            return 0;
+        }
+        self.late_us[(self.late_us.len() - 1) * percent / 100]
+    }
 }
 
 /// Whether every press and release the host made appears on the firmware's bus, key by key
@@ -580,6 +592,7 @@ pub fn same_key_events(
                 ));
             }
             m.max_late_us = m.max_late_us.max(fe.t_us - he.t_us);
+            m.late_us.push(fe.t_us - he.t_us);
             if he.down {
                 m.presses += 1;
             } else {
@@ -595,6 +608,7 @@ pub fn same_key_events(
             ));
         }
     }
+    m.late_us.sort_unstable();
     Ok(m)
 }
 

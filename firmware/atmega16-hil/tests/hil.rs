@@ -44,10 +44,12 @@ fn assert_same_as_host(hil: &Hil, host: &HostRobot, from: usize, stream: &[u8]) 
     );
     assert_eq!(bus.outputs(), host.outputs(), "final board outputs");
     println!(
-        "{} host writes; {} presses and {} releases on the boards, at most {} µs after the host",
+        "{} host writes; {} presses and {} releases on the boards after the host's by: median {} µs, 99 % {} µs, at most {} µs",
         host.boards.writes.len(),
         m.presses,
         m.releases,
+        m.percentile(50),
+        m.percentile(99),
         m.max_late_us
     );
     m
@@ -353,18 +355,29 @@ fn a_full_rate_din_line_loses_no_press_or_release() {
     );
     assert!(
         m.presses > 1000 && m.releases > 1000,
-        "a flood that presses keys ({m:?})"
+        "a flood that presses keys ({} presses, {} releases)",
+        m.presses,
+        m.releases
+    );
+    // Half of them within one byte and one board write (456 µs at 83.33 kHz) of the host's;
+    // the rest wait behind orch-core's guard scans (MAX_LATE_US).
+    assert!(
+        m.percentile(50) <= SIM_BYTE_US + 456,
+        "median lateness {} µs",
+        m.percentile(50)
     );
     let stack = {
         hil.run_us(300_000);
         hil.stack_high_water()
     };
     println!(
-        "flood: {} bytes in {:.1} s simulated, {} presses and {} releases, latest {} µs after the host; deepest stack {} bytes; {:.1?}",
+        "flood: {} bytes in {:.1} s simulated, {} presses and {} releases, after the host's by median {} µs, 99 % {} µs, at most {} µs; deepest stack {} bytes; {:.1?}",
         stream.len(),
         stream.len() as f64 * SIM_BYTE_US as f64 / 1e6,
         m.presses,
         m.releases,
+        m.percentile(50),
+        m.percentile(99),
         m.max_late_us,
         stack,
         t0.elapsed()
