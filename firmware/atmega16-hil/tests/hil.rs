@@ -397,24 +397,30 @@ fn twi_hz() -> u64 {
         .expect("pub const TWI_HZ: u32 = …; in twi.rs")
 }
 
+/// The size of section `name` in a 32-bit little-endian ELF file, 0 if it has none.
+fn elf_section_size(path: &std::path::Path, name: &str) -> u64 {
+    let f = std::fs::read(path).unwrap();
+    let u16_at = |o: usize| u16::from_le_bytes([f[o], f[o + 1]]) as usize;
+    let u32_at = |o: usize| u32::from_le_bytes([f[o], f[o + 1], f[o + 2], f[o + 3]]) as usize;
+    assert_eq!(&f[..5], b"\x7fELF\x01", "a 32-bit ELF file");
+    let (shoff, shentsize, shnum, shstrndx) =
+        (u32_at(0x20), u16_at(0x2E), u16_at(0x30), u16_at(0x32));
+    let header = |i: usize| shoff + i * shentsize;
+    let names = u32_at(header(shstrndx) + 0x10);
+    (0..shnum)
+        .find(|&i| {
+            let at = names + u32_at(header(i));
+            f[at..].split(|&b| b == 0).next() == Some(name.as_bytes())
+        })
+        .map_or(0, |i| u32_at(header(i) + 0x14) as u64)
+}
+
 /// Figures for the README: run with `--nocapture`.
 #[test]
 fn figures() {
-    // Flash and RAM from avr-size.
+    // Flash and RAM from the ELF's section headers (what `avr-size -A` prints).
     let elf = elf_path();
-    let size = std::process::Command::new("avr-size")
-        .arg("-A")
-        .arg(&elf)
-        .output()
-        .expect("avr-size (Debian's binutils-avr)");
-    let text = String::from_utf8_lossy(&size.stdout);
-    let section = |name: &str| -> u64 {
-        text.lines()
-            .find(|l| l.split_whitespace().next() == Some(name))
-            .and_then(|l| l.split_whitespace().nth(1))
-            .and_then(|n| n.parse().ok())
-            .unwrap_or(0)
-    };
+    let section = |name: &str| elf_section_size(&elf, name);
     let (flash_text, data, bss) = (section(".text"), section(".data"), section(".bss"));
 
     let mut hil = Hil::new();
