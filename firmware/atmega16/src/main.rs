@@ -80,7 +80,9 @@ fn main() -> ! {
     // the value within four cycles): the ATmega16 takes the prescaler either way, but simavr
     // keeps WDP at 0 (16 ms) unless it comes this way.
     avr_device::asm::wdr();
-    dp.WDT.wdtcr.write(|w| unsafe { w.bits((1 << 4) | (1 << 3)) });
+    dp.WDT
+        .wdtcr
+        .write(|w| unsafe { w.bits((1 << 4) | (1 << 3)) });
     dp.WDT.wdtcr.write(|w| unsafe { w.bits((1 << 3) | 0b101) });
 
     // The thesis's MOSFET port: all outputs, all low.
