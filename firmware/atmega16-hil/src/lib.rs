@@ -656,7 +656,9 @@ pub fn smf_to_wire(data: &[u8]) -> Vec<(u64, u8)> {
 /// A DIN line at full rate for `seconds`: running status throughout; first sweeps of
 /// Note-On/Note-Off pairs over all 61 keys (what once made the firmware reset after 125 ms),
 /// then notes on random keys, half of them Note-Offs (velocity 0): re-strikes inside the
-/// guard's rest, presses shorter than its shortest strike, chords past its power budget.
+/// guard's rest, presses shorter than its shortest strike, chords past its power budget;
+/// there a MIDI clock byte (0xF8, real time) now and then falls inside a message, as a
+/// sequencer's clock does.
 pub fn flood_stream(seconds: u64) -> Vec<u8> {
     let n = (seconds * 1_000_000 / SIM_BYTE_US) as usize;
     let mut s = vec![0x90];
@@ -680,7 +682,12 @@ pub fn flood_stream(seconds: u64) -> Vec<u8> {
         } else {
             1 + (r >> 8) as u8 % 127
         };
-        s.extend([key, velocity]);
+        if r >> 24 < 16 {
+            // One message in 16: the clock byte between the key and the velocity.
+            s.extend([key, 0xF8, velocity]);
+        } else {
+            s.extend([key, velocity]);
+        }
     }
     s
 }
