@@ -12,6 +12,9 @@ pub const UBRR: u8 = 15;
 /// the ring fills only while it is stopped (it never waits on the bus).
 const RX_N: u8 = 32;
 const TX_N: u8 = 16;
+// Powers of two: indexes are masked, so the handlers have no bounds checks (a check's call
+// would make them save every register).
+const _: () = assert!(RX_N.is_power_of_two() && TX_N.is_power_of_two());
 
 static mut RX_BUF: [u8; RX_N as usize] = [0; RX_N as usize];
 /// The low 16 bits of the µs clock when each byte was taken from the UART.
@@ -57,8 +60,9 @@ pub fn pop() -> Option<(u8, u16)> {
         if tail == read_volatile(addr_of!(RX_HEAD)) {
             return None;
         }
-        let b = read_volatile(addr_of!(RX_BUF[tail as usize]));
-        let at = read_volatile(addr_of!(RX_AT[tail as usize]));
+        let i = (tail & (RX_N - 1)) as usize;
+        let b = read_volatile(addr_of!(RX_BUF[i]));
+        let at = read_volatile(addr_of!(RX_AT[i]));
         write_volatile(addr_of_mut!(RX_TAIL), (tail + 1) % RX_N);
         Some((b, at))
     }
@@ -80,8 +84,9 @@ fn USART_RXC() {
                 let lost = read_volatile(addr_of!(RX_LOST));
                 write_volatile(addr_of_mut!(RX_LOST), lost.saturating_add(1));
             } else {
-                write_volatile(addr_of_mut!(RX_BUF[head as usize]), b);
-                write_volatile(addr_of_mut!(RX_AT[head as usize]), at);
+                let i = (head & (RX_N - 1)) as usize;
+                write_volatile(addr_of_mut!(RX_BUF[i]), b);
+                write_volatile(addr_of_mut!(RX_AT[i]), at);
                 write_volatile(addr_of_mut!(RX_HEAD), next);
             }
             // Thru: straight out if nothing is queued and the data register is free.
@@ -90,7 +95,7 @@ fn USART_RXC() {
             } else {
                 let next = (TX_HEAD + 1) % TX_N;
                 if next != TX_TAIL {
-                    TX_BUF[TX_HEAD as usize] = b;
+                    TX_BUF[(TX_HEAD & (TX_N - 1)) as usize] = b;
                     TX_HEAD = next;
                 }
                 u.ucsrb.modify(|r, w| w.bits(r.bits() | UDRIE));
@@ -106,7 +111,8 @@ fn USART_UDRE() {
     // SAFETY: see the statics.
     unsafe {
         if TX_HEAD != TX_TAIL {
-            u.udr.write(|w| w.bits(TX_BUF[TX_TAIL as usize]));
+            u.udr
+                .write(|w| w.bits(TX_BUF[(TX_TAIL & (TX_N - 1)) as usize]));
             TX_TAIL = (TX_TAIL + 1) % TX_N;
         }
         if TX_HEAD == TX_TAIL {

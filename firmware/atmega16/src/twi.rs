@@ -64,11 +64,10 @@ const REP_START: u8 = 0x10;
 const MT_SLA_ACK: u8 = 0x18;
 const MT_DATA_ACK: u8 = 0x28;
 const ARB_LOST: u8 = 0x38;
-const MT_SLA_NACK: u8 = 0x20;
-const MT_DATA_NACK: u8 = 0x30;
 
-/// Queued writes: 16 is a whole retry round for all four boards and more.
+/// Queued writes: 16 is a whole retry round for all four boards and more. A power of two.
 const Q: u8 = 16;
+const _: () = assert!(Q.is_power_of_two());
 /// Board index (bits 0..=1) and register: bit 2 set for the configuration registers.
 static mut Q_JOB: [u8; Q as usize] = [0; Q as usize];
 static mut Q_VALUE: [u16; Q as usize] = [0; Q as usize];
@@ -144,7 +143,10 @@ pub fn clear_failed(board: u8) {
 /// Whether no write is queued or on the bus.
 #[inline(always)]
 pub fn idle() -> bool {
-    unsafe { read_volatile(addr_of!(STEP)) == 0 }
+    unsafe {
+        read_volatile(addr_of!(STEP)) == 0
+            && read_volatile(addr_of!(Q_TAIL)) == read_volatile(addr_of!(Q_HEAD))
+    }
 }
 
 /// Queues `[register, lo, hi]` for `board` (`kind` is [`OUTPUTS`] or [`CONFIGURATION`]) and
@@ -161,21 +163,15 @@ pub fn push(board: u8, kind: u8, value: u16) {
         write_volatile(addr_of_mut!(Q_VALUE[head as usize]), value);
         write_volatile(addr_of_mut!(Q_HEAD), next);
         if read_volatile(addr_of!(STEP)) == 0 {
-            // Idle: the handler does not run until this START completes. The last STOP must
-            // be out first.
-            let t0 = clock::ticks16_raw();
-            while twi().twcr.read().bits() & TWSTO != 0
-                && clock::ticks16_raw().wrapping_sub(t0) < STEP_TIMEOUT_US
-            {}
-            avr_device::interrupt::free(|_| begin(0));
+            // Idle: the handler does not run until this START completes.
+            avr_device::interrupt::free(|_| begin());
         }
     }
 }
 
-/// Goes on with the next queued write of a board that is not set aside, or goes idle.
-/// `stop` is [`TWSTO`] to end the transaction on the bus first (the STOP and the next START
-/// go out back to back), or 0. Called with interrupts off (the handler, `push`, `check`).
-fn begin(stop: u8) {
+/// Starts the next queued write of a board that is not set aside, or stays idle. Called by
+/// the main loop with interrupts off, while the handler is idle (or reported an error).
+fn begin() {
     unsafe {
         let head = read_volatile(addr_of!(Q_HEAD));
         let mut tail = Q_TAIL;
@@ -184,91 +180,131 @@ fn begin(stop: u8) {
         }
         Q_TAIL = tail;
         TRIES = 0;
-        if tail == head {
-            STEP = 0;
-            // Interrupt off; TWINT cleared (after a lost arbitration it is still set).
-            control(TWINT | stop | TWEN);
-            return;
+        STEP = 0;
+        if tail != head {
+            restart();
         }
-        restart(stop);
     }
 }
 
-/// Sends a START (after a STOP if `stop` is [`TWSTO`]) for the write at `Q_TAIL`.
-fn restart(stop: u8) {
+/// Sends a START for the write at `Q_TAIL`, once the last STOP is out. Main loop only.
+fn restart() {
+    let t0 = clock::ticks16_raw();
+    while twi().twcr.read().bits() & TWSTO != 0
+        && clock::ticks16_raw().wrapping_sub(t0) < STEP_TIMEOUT_US
+    {}
     unsafe {
         STEP = 1;
         STEP_AT = clock::ticks16_raw();
     }
-    control(TWINT | stop | TWSTA | TWEN | TWIE);
+    control(TWINT | TWSTA | TWEN | TWIE);
 }
 
-/// The write at `Q_TAIL` failed (NACK, lost arbitration, or a timeout after a recovery):
-/// try it again, or set its board aside and go on with the next write.
-fn fail(stop: u8) {
+/// The write at `Q_TAIL` failed (NACK, lost arbitration, a bus error, or a timeout after a
+/// recovery): try it again, or set its board aside and go on with the next write. Main loop
+/// only, interrupts off.
+fn fail() {
     unsafe {
         TRIES += 1;
         if TRIES < ATTEMPTS {
-            restart(stop);
+            restart();
             return;
         }
         FAILED |= 1 << (Q_JOB[Q_TAIL as usize] & 3);
         // `begin` skips the board's queued writes.
-        begin(stop);
+        begin();
     }
 }
 
+/// `STEP` when the handler met a NACK, a lost arbitration or a bus error: it has let go of
+/// the bus (a STOP where it may) and left the rest to [`check`].
+const STEP_FAILED: u8 = 0xFF;
+
+/// The TWI interrupt: only the steps of a write that goes well, and straight on to the next
+/// queued write. It calls nothing (so it saves few registers); what goes wrong, and a next
+/// write for a board set aside, are the main loop's, in [`check`].
 #[avr_device::interrupt(atmega16)]
 fn TWI() {
     crate::probe::twi_enter();
-    let status = twi().twsr.read().bits() & 0xF8;
+    let t = twi();
+    let status = t.twsr.read().bits() & 0xF8;
     unsafe {
-        let tail = Q_TAIL as usize;
-        let job = Q_JOB[tail];
-        let send = |byte: u8| {
-            twi().twdr.write(|w| w.bits(byte));
-            STEP += 1;
-            STEP_AT = clock::ticks16_raw();
-            control(TWINT | TWEN | TWIE);
+        let step = STEP;
+        // Masked (Q is a power of two): no bounds check, so no call and few saved registers.
+        let tail = (Q_TAIL & (Q - 1)) as usize;
+        let ok = match step {
+            1 => status == START || status == REP_START,
+            2 => status == MT_SLA_ACK,
+            _ => status == MT_DATA_ACK,
         };
-        match (STEP, status) {
-            (1, START | REP_START) => send(ADDRESSES[(job & 3) as usize] << 1),
-            (2, MT_SLA_ACK) => send(if job & CONFIGURATION != 0 {
-                CONFIGURATION_0
+        if !ok {
+            // A lost arbitration has released the bus already; otherwise a STOP.
+            t.twcr.write(|w| {
+                w.bits(if status == ARB_LOST {
+                    TWINT | TWEN
+                } else {
+                    TWINT | TWSTO | TWEN
+                })
+            });
+            STEP = STEP_FAILED;
+        } else if step < 5 {
+            let job = Q_JOB[tail];
+            let byte = match step {
+                1 => (ADDRESSES[0] + (job & 3)) << 1,
+                2 => {
+                    if job & CONFIGURATION != 0 {
+                        CONFIGURATION_0
+                    } else {
+                        OUTPUT_PORT_0
+                    }
+                }
+                3 => Q_VALUE[tail] as u8,
+                _ => (Q_VALUE[tail] >> 8) as u8,
+            };
+            t.twdr.write(|w| w.bits(byte));
+            STEP = step + 1;
+            STEP_AT = clock::ticks16_raw();
+            t.twcr.write(|w| w.bits(TWINT | TWEN | TWIE));
+        } else {
+            // Done. The next write's START right after the STOP, unless its board is set
+            // aside (then the main loop skips it).
+            let next = (Q_TAIL + 1) % Q;
+            Q_TAIL = next;
+            TRIES = 0;
+            if next != read_volatile(addr_of!(Q_HEAD))
+                && FAILED & (1 << (Q_JOB[(next & (Q - 1)) as usize] & 3)) == 0
+            {
+                STEP = 1;
+                STEP_AT = clock::ticks16_raw();
+                t.twcr
+                    .write(|w| w.bits(TWINT | TWSTO | TWSTA | TWEN | TWIE));
             } else {
-                OUTPUT_PORT_0
-            }),
-            (3, MT_DATA_ACK) => send(Q_VALUE[tail] as u8),
-            (4, MT_DATA_ACK) => send((Q_VALUE[tail] >> 8) as u8),
-            (5, MT_DATA_ACK) => {
-                // Done: STOP, and the next write's START right after it.
-                Q_TAIL = (Q_TAIL + 1) % Q;
-                begin(TWSTO);
-            }
-            (_, MT_SLA_NACK | MT_DATA_NACK) => fail(TWSTO),
-            // The hardware has let go of the bus already.
-            (_, ARB_LOST) => fail(0),
-            _ => {
-                // A bus error or a status out of order: release the interface and let
-                // `check` recover the bus when the step times out.
-                control(TWINT | TWSTO | TWEN);
+                STEP = 0;
+                t.twcr.write(|w| w.bits(TWINT | TWSTO | TWEN));
             }
         }
     }
     crate::probe::twi_exit();
 }
 
-/// Recovers the bus when a step has taken longer than [`STEP_TIMEOUT_US`] (a bus held low, a
-/// dead TWI, a bus error), and counts a failed attempt. Call it from the main loop.
+/// The main loop's part of the bus, called on every pass: retries and gives up after a
+/// failed step, starts a write the handler left queued, and recovers the bus when a step
+/// has taken longer than [`STEP_TIMEOUT_US`] (a bus held low, a dead TWI), counting a failed
+/// attempt.
 #[inline(always)]
 pub fn check() {
     if idle() {
         return;
     }
     avr_device::interrupt::free(|_| unsafe {
-        if STEP != 0 && clock::ticks16_raw().wrapping_sub(STEP_AT) > STEP_TIMEOUT_US {
-            recover();
-            fail(0);
+        match STEP {
+            0 => begin(),
+            STEP_FAILED => fail(),
+            _ if clock::ticks16_raw().wrapping_sub(STEP_AT) > STEP_TIMEOUT_US => {
+                recover();
+                fail();
+            }
+            _ => {}
         }
     });
 }
