@@ -46,13 +46,13 @@ pub fn now_us() -> u64 {
     })
 }
 
-/// The full time of a stamp taken at most 65 ms ago (the low 16 bits of the clock then),
-/// and the time now. A stamp older than that (the main loop stalled) comes out up to 65 ms
-/// late, never in the future.
+/// The full time of a stamp taken at most 65 ms ago (the low 16 bits of the clock then). A
+/// stamp older than that (the main loop stalled) comes out up to 65 ms late, never in the
+/// future.
 #[inline(always)]
-pub fn since(stamp: u16) -> (u64, u64) {
+pub fn since(stamp: u16) -> u64 {
     let now = now_us();
-    (now - (now as u16).wrapping_sub(stamp) as u64, now)
+    now - (now as u16).wrapping_sub(stamp) as u64
 }
 
 #[avr_device::interrupt(atmega16)]

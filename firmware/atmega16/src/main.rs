@@ -118,7 +118,7 @@ fn main() -> ! {
         twi::check();
         if let Some((byte, stamp)) = midi::pop() {
             probe::work(true);
-            let (at, _) = clock::since(stamp);
+            let at = clock::since(stamp);
             // The guard's timers that fall before this byte first, each at its own time,
             // then the byte at its arrival time: the same steps, at the same times, as
             // orch-core on a host fed the same bytes.
