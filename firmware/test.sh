@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Builds the ATmega16 firmware and runs its hardware-in-the-loop tests in simavr.
+# Builds the ATmega16 firmware and runs its hardware-in-the-loop tests in simavr, and builds
+# the Raspberry Pi Pico firmware (firmware/rp2040) for thumbv6m-none-eabi.
 #
 # From a fresh machine: installs what is missing (Debian packages, the nightly's rust-src),
 # builds the firmware ELF at
@@ -40,6 +41,16 @@ echo "== building the firmware ($channel, avr-none, atmega16)"
 elf="$here/atmega16/target/avr-none/release/orch-atmega16.elf"
 echo "== $elf"
 avr-size --format=avr --mcu=atmega16 "$elf" | grep -E 'Program|Data'
+
+echo "== building the Raspberry Pi Pico firmware (stable, thumbv6m-none-eabi)"
+if ! rustup target list --toolchain stable --installed | grep -q '^thumbv6m-none-eabi$'; then
+    rustup target add thumbv6m-none-eabi --toolchain stable
+fi
+(cd "$here/rp2040" && cargo fmt --check && cargo build --release --locked)
+pico="$here/rp2040/target/thumbv6m-none-eabi/release/orch-rp2040"
+echo "== $pico"
+size_tool="$(command -v llvm-size || command -v arm-none-eabi-size || true)"
+[ -z "$size_tool" ] || "$size_tool" "$pico"
 
 echo "== hardware-in-the-loop tests (simavr via avr-tester)"
 cd "$here/atmega16-hil"

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::rc::Rc;
 
 use avr_tester::{AvrTester, Reader, TwiPacket, TwiSlave};
-use orch_core::{Config, Instant, Interpreter, NotePool, Recording};
+use orch_core::{BoardId, Config, FingerBoards, Instant, Interpreter, NotePool};
 
 /// The clock of the simulated ATmega16.
 pub const F_CPU: u64 = 8_000_000;
@@ -36,6 +36,9 @@ pub struct Transaction {
     pub board: usize,
     /// The bytes after the address byte.
     pub bytes: Vec<u8>,
+    /// CPU cycle of the START (simavr sends it with the address byte, taking no bus time
+    /// for either).
+    pub start_cycle: u64,
     /// CPU cycle of the STOP condition.
     pub stop_cycle: u64,
 }
@@ -51,6 +54,7 @@ pub struct Pca9555 {
     command_seen: bool,
     reading: bool,
     bytes: Vec<u8>,
+    started: u64,
     /// When set, the board acknowledges nothing (unpowered, missing, or a dead bus).
     pub nack: bool,
 }
@@ -65,6 +69,7 @@ impl Default for Pca9555 {
             command_seen: false,
             reading: false,
             bytes: Vec::new(),
+            started: 0,
             nack: false,
         }
     }
@@ -121,13 +126,21 @@ impl Bus {
     /// The output-register writes (`[0x02, lo, hi]`) to each board, in order, from log entry
     /// `from` on.
     pub fn output_writes(&self, from: usize) -> [Vec<u16>; 4] {
-        let mut out: [Vec<u16>; 4] = Default::default();
-        for t in &self.log[from..] {
-            if t.bytes.len() == 3 && t.bytes[0] == 0x02 {
-                out[t.board].push(u16::from_le_bytes([t.bytes[1], t.bytes[2]]));
-            }
-        }
-        out
+        per_board(&self.timed_output_writes(from))
+    }
+
+    /// The output-register writes from log entry `from` on, in bus order, each with the time
+    /// of its STOP in µs.
+    pub fn timed_output_writes(&self, from: usize) -> Vec<TimedWrite> {
+        self.log[from..]
+            .iter()
+            .filter(|t| t.bytes.len() == 3 && t.bytes[0] == 0x02)
+            .map(|t| TimedWrite {
+                t_us: t.stop_cycle / (F_CPU / 1_000_000),
+                board: t.board,
+                outputs: u16::from_le_bytes([t.bytes[1], t.bytes[2]]),
+            })
+            .collect()
     }
 }
 
@@ -148,9 +161,11 @@ impl TwiSlave for Slave {
             b.active = false;
             if was && !b.reading {
                 let bytes = std::mem::take(&mut b.bytes);
+                let start_cycle = bus.boards[i].started;
                 bus.log.push(Transaction {
                     board: i,
                     bytes,
+                    start_cycle,
                     stop_cycle: now,
                 });
             }
@@ -168,13 +183,16 @@ impl TwiSlave for Slave {
             if b.active && !b.reading && !b.bytes.is_empty() {
                 // A repeated START ends a write part.
                 let bytes = std::mem::take(&mut b.bytes);
+                let start_cycle = b.started;
                 bus.log.push(Transaction {
                     board: i,
                     bytes,
+                    start_cycle,
                     stop_cycle: now,
                 });
             }
             let b = &mut bus.boards[i];
+            b.started = now;
             b.active = true;
             b.reading = p.addr & 1 == 1;
             if !b.reading {
@@ -296,9 +314,14 @@ impl Hil {
 
     /// Sends bytes back to back at wire pacing (one every 320 µs).
     pub fn send(&mut self, bytes: &[u8]) {
+        self.send_paced(bytes, BYTE_US);
+    }
+
+    /// Sends bytes one every `pace_us`.
+    pub fn send_paced(&mut self, bytes: &[u8], pace_us: u64) {
         for &b in bytes {
             self.put(b);
-            self.run_us(BYTE_US);
+            self.run_us(pace_us);
         }
     }
 
@@ -375,13 +398,55 @@ impl Hil {
     }
 }
 
+/// One board write with its time: on the host, when the interpreter made it; from the
+/// simulated bus, the STOP of the transaction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TimedWrite {
+    /// µs since the simulation started.
+    pub t_us: u64,
+    /// Board index (0..4).
+    pub board: usize,
+    /// The 16 outputs written.
+    pub outputs: u16,
+}
+
+/// Each board's values, in order.
+pub fn per_board(writes: &[TimedWrite]) -> [Vec<u16>; 4] {
+    let mut out: [Vec<u16>; 4] = Default::default();
+    for w in writes {
+        out[w.board].push(w.outputs);
+    }
+    out
+}
+
+/// The host's boards: every write, with the time it was made.
+#[derive(Debug, Default)]
+pub struct TimedRecorder {
+    /// The time of the writes being made now.
+    pub now_us: u64,
+    /// Every write, in order.
+    pub writes: Vec<TimedWrite>,
+}
+
+impl FingerBoards for TimedRecorder {
+    type Error = std::convert::Infallible;
+    fn write_board(&mut self, board: BoardId, outputs: u16) -> Result<(), Self::Error> {
+        self.writes.push(TimedWrite {
+            t_us: self.now_us,
+            board: board.index as usize,
+            outputs,
+        });
+        Ok(())
+    }
+}
+
 /// orch-core on the host, with the firmware's configuration, fed the same bytes at the same
-/// times: the board writes it makes, in order, and its final outputs.
+/// times: the board writes it makes, in order and with their times, and its final outputs.
 pub struct HostRobot {
     /// The interpreter, as built into the firmware.
     pub robot: Interpreter<4, 61, NotePool<32>>,
-    /// What it wrote.
-    pub boards: Recording<4096>,
+    /// What it wrote, and when.
+    pub boards: TimedRecorder,
 }
 
 impl Default for HostRobot {
@@ -395,18 +460,21 @@ impl HostRobot {
     pub fn new() -> Self {
         Self {
             robot: Interpreter::new(Config::THESIS).unwrap(),
-            boards: Recording::new(),
+            boards: TimedRecorder::default(),
         }
     }
 
-    /// Feeds one byte at `us` and flushes, as the firmware does for each byte it takes.
+    /// Feeds one byte at `us` and flushes, as the firmware does for each byte it takes (after
+    /// the guard's timers due by then, each at its own time).
     pub fn feed(&mut self, byte: u8, us: u64) {
         self.advance_to(us);
         self.robot.feed(byte, Instant::from_micros(us));
+        self.boards.now_us = us;
         self.robot.flush(&mut self.boards).unwrap();
     }
 
-    /// Runs the guard's timers at every deadline up to `us`, as the firmware's loop does.
+    /// Runs the guard's timers at every deadline up to `us`, each at its own time, as the
+    /// firmware's loop does.
     pub fn advance_to(&mut self, us: u64) {
         while let Some(d) = self.robot.next_deadline() {
             if d.as_micros() > us {
@@ -416,9 +484,10 @@ impl HostRobot {
         }
     }
 
-    /// Runs the guard's timers up to `us`.
+    /// Runs the guard's timers at `us`.
     pub fn tick(&mut self, us: u64) {
         self.robot.tick(Instant::from_micros(us));
+        self.boards.now_us = us;
         self.robot.flush(&mut self.boards).unwrap();
     }
 
@@ -429,12 +498,118 @@ impl HostRobot {
 
     /// The writes to each board, in order.
     pub fn writes(&self) -> [Vec<u16>; 4] {
-        let mut out: [Vec<u16>; 4] = Default::default();
-        for w in self.boards.writes() {
-            out[w.board.index as usize].push(w.outputs);
-        }
-        out
+        per_board(&self.boards.writes)
     }
+}
+
+/// A key going down or up, as a board write shows it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct KeyEvent {
+    /// µs since the simulation started.
+    pub t_us: u64,
+    /// Board × 16 + output bit.
+    pub key: usize,
+    /// Down (pressed) or up (released).
+    pub down: bool,
+}
+
+/// Every press and release in a series of board writes (every board starts at 0).
+pub fn key_events(writes: &[TimedWrite]) -> Vec<KeyEvent> {
+    let mut last = [0u16; 4];
+    let mut out = Vec::new();
+    for w in writes {
+        let changed = last[w.board] ^ w.outputs;
+        for bit in 0..16 {
+            if changed & (1 << bit) != 0 {
+                out.push(KeyEvent {
+                    t_us: w.t_us,
+                    key: w.board * 16 + bit,
+                    down: w.outputs & (1 << bit) != 0,
+                });
+            }
+        }
+        last[w.board] = w.outputs;
+    }
+    out
+}
+
+/// How the firmware's presses and releases compare with the host's.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct EventMatch {
+    /// Presses matched.
+    pub presses: usize,
+    /// Releases matched.
+    pub releases: usize,
+    /// The latest a firmware event came after the host's, in µs.
+    pub max_late_us: u64,
+    /// How late each firmware event came, in µs, sorted.
+    pub late_us: Vec<u64>,
+}
+
+impl EventMatch {
+    /// The lateness below which `percent` % of the events came.
+    pub fn percentile(&self, percent: usize) -> u64 {
+        if self.late_us.is_empty() {
+            return 0;
+        }
+        self.late_us[(self.late_us.len() - 1) * percent / 100]
+    }
+}
+
+/// Whether every press and release the host made appears on the firmware's bus, key by key
+/// in the same order, none missing and none extra, each no earlier than the host made it and
+/// at most `max_late_us` after.
+pub fn same_key_events(
+    firmware: &[TimedWrite],
+    host: &[TimedWrite],
+    max_late_us: u64,
+) -> Result<EventMatch, String> {
+    let (f, h) = (key_events(firmware), key_events(host));
+    let mut m = EventMatch::default();
+    for key in 0..64 {
+        let fk: Vec<&KeyEvent> = f.iter().filter(|e| e.key == key).collect();
+        let hk: Vec<&KeyEvent> = h.iter().filter(|e| e.key == key).collect();
+        for (i, he) in hk.iter().enumerate() {
+            let what = if he.down { "press" } else { "release" };
+            let Some(fe) = fk.get(i) else {
+                return Err(format!(
+                    "key {key} (board {}, bit {}): the host's {what} #{i} at {} µs never reached the boards ({} events on the bus, {} on the host)",
+                    key / 16, key % 16, he.t_us, fk.len(), hk.len()
+                ));
+            };
+            if fe.down != he.down {
+                return Err(format!(
+                    "key {key}: event #{i} is a {} on the bus at {} µs, the host's is a {what} at {} µs",
+                    if fe.down { "press" } else { "release" },
+                    fe.t_us,
+                    he.t_us
+                ));
+            }
+            if fe.t_us < he.t_us || fe.t_us - he.t_us > max_late_us {
+                return Err(format!(
+                    "key {key}: {what} #{i} on the bus at {} µs, the host made it at {} µs (allowed: 0..={max_late_us} µs later)",
+                    fe.t_us, he.t_us
+                ));
+            }
+            m.max_late_us = m.max_late_us.max(fe.t_us - he.t_us);
+            m.late_us.push(fe.t_us - he.t_us);
+            if he.down {
+                m.presses += 1;
+            } else {
+                m.releases += 1;
+            }
+        }
+        if fk.len() > hk.len() {
+            let e = fk[hk.len()];
+            return Err(format!(
+                "key {key}: the bus has a {} at {} µs that the host never made",
+                if e.down { "press" } else { "release" },
+                e.t_us
+            ));
+        }
+    }
+    m.late_us.sort_unstable();
+    Ok(m)
 }
 
 /// A Standard MIDI File as timed wire bytes: (µs from the start, byte), channel messages
@@ -478,36 +653,41 @@ pub fn smf_to_wire(data: &[u8]) -> Vec<(u64, u8)> {
     out
 }
 
-/// Whether every board's writes are the host's, in order, with some of the host's
-/// intermediate states possibly never written (the firmware takes every byte that is waiting
-/// before it writes, so two messages that arrive while it is writing become one write), and
-/// the same last value. Returns how many host writes were coalesced away.
-pub fn same_writes_coalesced(
-    firmware: &[Vec<u16>; 4],
-    host: &[Vec<u16>; 4],
-) -> Result<usize, String> {
-    let mut skipped = 0;
-    for b in 0..4 {
-        let (f, h) = (&firmware[b], &host[b]);
-        let mut j = 0;
-        for (i, &v) in f.iter().enumerate() {
-            while j < h.len() && h[j] != v {
-                j += 1;
-                skipped += 1;
-            }
-            if j == h.len() {
-                return Err(format!("board {b}: firmware write #{i} = {v:#06x} is not a state the host went through next (firmware {f:x?}, host {h:x?})"));
-            }
-            j += 1;
-        }
-        skipped += h.len() - j;
-        if f.last() != h.last() {
-            return Err(format!(
-                "board {b}: last write {:x?} vs host {:x?}",
-                f.last(),
-                h.last()
-            ));
+/// A DIN line at full rate for `seconds`: running status throughout; first sweeps of
+/// Note-On/Note-Off pairs over all 61 keys (what once made the firmware reset after 125 ms),
+/// then notes on random keys, half of them Note-Offs (velocity 0): re-strikes inside the
+/// guard's rest, presses shorter than its shortest strike, chords past its power budget;
+/// there a MIDI clock byte (0xF8, real time) now and then falls inside a message, as a
+/// sequencer's clock does.
+pub fn flood_stream(seconds: u64) -> Vec<u8> {
+    let n = (seconds * 1_000_000 / SIM_BYTE_US) as usize;
+    let mut s = vec![0x90];
+    while s.len() < n / 3 {
+        for k in 36..=96u8 {
+            s.extend([k, 100, k, 0]);
         }
     }
-    Ok(skipped)
+    let mut x = 0x2545_f491_u32;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        x
+    };
+    while s.len() + 1 < n {
+        let r = next();
+        let key = 36 + (r % 61) as u8;
+        let velocity = if r >> 16 & 1 == 0 {
+            0
+        } else {
+            1 + (r >> 8) as u8 % 127
+        };
+        if r >> 24 < 16 {
+            // One message in 16: the clock byte between the key and the velocity.
+            s.extend([key, 0xF8, velocity]);
+        } else {
+            s.extend([key, velocity]);
+        }
+    }
+    s
 }

@@ -24,10 +24,11 @@ pub fn start(tc: TC1) {
     tc.timsk.modify(|r, w| unsafe { w.bits(r.bits() | TOIE1) });
 }
 
-/// The low 16 bits of the clock (µs), for short timeouts. Safe to call with interrupts on:
-/// no interrupt handler touches Timer1's 16-bit TEMP register.
+/// The low 16 bits of the clock (µs), with interrupts off: an interrupt handler that reads
+/// TCNT1 between the two byte reads would change Timer1's shared TEMP register. Use it in
+/// interrupt handlers and critical sections.
 #[inline(always)]
-pub fn ticks16() -> u16 {
+pub fn ticks16_raw() -> u16 {
     tc1().tcnt1.read().bits()
 }
 
@@ -45,10 +46,13 @@ pub fn now_us() -> u64 {
     })
 }
 
-/// Busy-waits `us` microseconds (at most 65 ms).
-pub fn delay_us(us: u16) {
-    let t0 = ticks16();
-    while ticks16().wrapping_sub(t0) < us {}
+/// The full time of a stamp taken at most 65 ms ago (the low 16 bits of the clock then). A
+/// stamp older than that (the main loop stalled) comes out up to 65 ms late, never in the
+/// future.
+#[inline(always)]
+pub fn since(stamp: u16) -> u64 {
+    let now = now_us();
+    now - (now as u16).wrapping_sub(stamp) as u64
 }
 
 #[avr_device::interrupt(atmega16)]

@@ -5,9 +5,10 @@
 //!   its stream on to the flute robot.
 //! - orch-core's decoder, interpreter and safety guard (`Interpreter<4, 61, NotePool<32>>`,
 //!   the thesis's keyboard), with time from Timer1 (1 µs ticks).
-//! - The four PCA9555 finger boards at 0x21..=0x24 through orch-boards' `FingerBoardSet`, on an
-//!   embedded-hal `I2c` over the TWI (83.33 kHz, as in the thesis) with timeouts, bus recovery
-//!   and retries. A board is written only when its bits change, in one transaction.
+//! - The four PCA9555 finger boards at 0x21..=0x24 on the TWI (83.33 kHz, as in the thesis),
+//!   interrupt-driven: writes are queued and go out while the main loop decodes the next
+//!   bytes, with timeouts, bus recovery and retries. A board is written only when its bits
+//!   change, in one transaction.
 //! - The watchdog (0.5 s): a hung firmware resets, and power-up releases every key.
 //! - JTAG off (JTD written twice), so that PORTC is free for the TWI.
 //! - Power-up: each board gets outputs 0 FIRST, THEN all pins outputs (the driver's safe
@@ -26,45 +27,37 @@ use core::convert::Infallible;
 use core::ptr::addr_of_mut;
 
 use avr_device::atmega16::Peripherals;
-use orch_boards::FingerBoardSet;
 use orch_core::{BoardId, FingerBoards, Instant, Interpreter, NotePool};
 
-use twi::Twi;
-
-/// The boards' 7-bit addresses (the thesis's 0x42..0x48 in write form).
-const ADDRESSES: [u8; 4] = [0x21, 0x22, 0x23, 0x24];
-/// Attempts per board write before the board is set aside until the next retry round.
-const ATTEMPTS: u8 = 3;
 /// How often boards that failed are initialised and written again.
 const RETRY_US: u64 = 10_000;
 
 type Robot = Interpreter<4, 61, NotePool<32>>;
-type Boards = FingerBoardSet<Twi, 4>;
 
-/// The boards as the interpreter's frame sees them: a board that fails [`ATTEMPTS`] times is
-/// marked in `failed` and skipped (the frame takes it as written); the main loop initialises
-/// it again later and writes the whole frame.
-struct Tolerant<'a> {
-    set: &'a mut Boards,
-    failed: &'a mut u8,
-}
+/// The boards as the interpreter's frame sees them: each write is queued for the TWI handler
+/// (the frame takes it as written). A board set aside after failing [`twi::ATTEMPTS`] times
+/// is skipped; the main loop initialises it again later and writes its whole frame.
+struct Boards;
 
-impl FingerBoards for Tolerant<'_> {
+impl FingerBoards for Boards {
     type Error = Infallible;
 
+    #[inline(always)]
     fn write_board(&mut self, board: BoardId, outputs: u16) -> Result<(), Infallible> {
-        let bit = 1u8 << (board.index & 7);
-        if *self.failed & bit != 0 {
-            return Ok(());
+        if twi::failed() & (1 << (board.index & 3)) == 0 {
+            twi::push(board.index, twi::OUTPUTS, outputs);
         }
-        for _ in 0..ATTEMPTS {
-            if self.set.write_board(board, outputs).is_ok() {
-                return Ok(());
-            }
-            avr_device::asm::wdr();
-        }
-        *self.failed |= bit;
         Ok(())
+    }
+}
+
+/// Each board: outputs 0 FIRST, THEN all pins outputs (a failed first write drops the
+/// second: the pins stay inputs), then `outputs` if any is on.
+fn init_board(board: u8, outputs: u16) {
+    twi::push(board, twi::OUTPUTS, 0);
+    twi::push(board, twi::CONFIGURATION, 0);
+    if outputs != 0 {
+        twi::push(board, twi::OUTPUTS, outputs);
     }
 }
 
@@ -83,8 +76,13 @@ fn main() -> ! {
     dp.CPU.mcucsr.write(|w| unsafe { w.bits(mcucsr) });
     dp.CPU.mcucsr.write(|w| unsafe { w.bits(mcucsr) });
 
-    // Watchdog on, about 0.52 s (WDP2 | WDP0).
+    // Watchdog on, about 0.52 s (WDP2 | WDP0). Through the timed sequence (WDTOE | WDE, then
+    // the value within four cycles): the ATmega16 takes the prescaler either way, but simavr
+    // keeps WDP at 0 (16 ms) unless it comes this way.
     avr_device::asm::wdr();
+    dp.WDT
+        .wdtcr
+        .write(|w| unsafe { w.bits((1 << 4) | (1 << 3)) });
     dp.WDT.wdtcr.write(|w| unsafe { w.bits((1 << 3) | 0b101) });
 
     // The thesis's MOSFET port: all outputs, all low.
@@ -94,70 +92,91 @@ fn main() -> ! {
 
     clock::start(dp.TC1);
     midi::start(dp.USART);
-    let mut boards: Boards = FingerBoardSet::new(Twi::new(dp.TWI, dp.PORTC), ADDRESSES);
+    twi::start(dp.TWI, dp.PORTC);
 
     // SAFETY: the only reference to ROBOT; the interrupt handlers never touch it.
     let robot = unsafe { &mut *addr_of_mut!(ROBOT) };
 
-    // Boards: outputs 0 first, then all pins outputs, one board at a time; a board that does
-    // not answer keeps its pins as inputs and is tried again in the loop.
-    let mut failed: u8 = 0;
+    // Boards: outputs 0 first, then all pins outputs, one board after another; the TWI
+    // handler sends them once interrupts are on. A board that does not answer keeps its
+    // pins as inputs and is tried again in the loop.
     for i in 0..4u8 {
-        if boards.init_board(i).is_err() {
-            failed |= 1 << i;
-        }
+        init_board(i, 0);
     }
-    let mut retry_at = clock::now_us() + RETRY_US;
+    let mut retry_at = RETRY_US;
     let mut publish_at = 0u64;
+    // The guard's next deadline, asked again after every call that may move it: the loop
+    // compares times with it, and asks orch-core (a few hundred cycles) only after feeding
+    // a byte or running a timer, once the write it made is on its way.
+    let mut deadline = u64::MAX;
 
     // SAFETY: everything the handlers use is set up.
     unsafe { avr_device::interrupt::enable() };
 
     loop {
         avr_device::asm::wdr();
-        if midi::pending() {
+        twi::check();
+        if let Some((byte, stamp)) = midi::pop() {
             probe::work(true);
-            while let Some(byte) = midi::pop() {
-                robot.feed(byte, Instant::from_micros(clock::now_us()));
+            let at = clock::since(stamp);
+            // The guard's timers that fall before this byte first, each at its own time,
+            // then the byte at its arrival time: the same steps, at the same times, as
+            // orch-core on a host fed the same bytes.
+            while deadline <= at {
+                tick(robot, deadline);
+                deadline = next_deadline(robot);
             }
+            robot.feed(byte, Instant::from_micros(at));
+            flush(robot);
+            deadline = next_deadline(robot);
             probe::work(false);
+            continue;
         }
         let now = clock::now_us();
-        if robot.next_deadline().is_some_and(|d| d.as_micros() <= now) {
+        if deadline <= now {
             probe::work(true);
-            robot.tick(Instant::from_micros(now));
+            tick(robot, deadline);
+            deadline = next_deadline(robot);
             probe::work(false);
         }
-        if robot.frame().any_dirty() {
-            probe::flushing(true);
-            let _ = robot.flush(&mut Tolerant {
-                set: &mut boards,
-                failed: &mut failed,
-            });
-            probe::flushing(false);
-        }
-        if failed != 0 && now >= retry_at {
-            probe::flushing(true);
+        let failed = twi::failed();
+        if failed != 0 && now >= retry_at && twi::idle() {
+            // Whatever a board holds after coming back, it gets the frame's outputs again.
             for i in 0..4u8 {
-                if failed & (1 << i) != 0 && boards.init_board(i).is_ok() {
-                    failed &= !(1 << i);
+                if failed & (1 << i) != 0 {
+                    twi::clear_failed(i);
+                    init_board(i, robot.frame().outputs(i as usize));
                 }
             }
-            // Whatever a recovered board holds now, the whole frame goes out again (boards
-            // whose driver cache already matches are not written).
-            robot.frame_mut().invalidate();
-            let _ = robot.flush(&mut Tolerant {
-                set: &mut boards,
-                failed: &mut failed,
-            });
-            retry_at = clock::now_us() + RETRY_US;
-            probe::flushing(false);
+            retry_at = now + RETRY_US;
         }
-        if now >= publish_at && !midi::pending() {
+        if now >= publish_at {
             probe::publish();
             publish_at = now + 250_000;
         }
     }
+}
+
+/// Runs the guard's timers at `at` and queues what they changed.
+#[inline(never)]
+fn tick(robot: &mut Robot, at: u64) {
+    robot.tick(Instant::from_micros(at));
+    flush(robot);
+}
+
+/// Queues the boards that changed (orch-core's flush visits every board; most bytes change
+/// none).
+#[inline(never)]
+fn flush(robot: &mut Robot) {
+    let frame = robot.frame();
+    if (0..4).any(|b| frame.is_dirty(b)) {
+        let _ = robot.flush(&mut Boards);
+    }
+}
+
+#[inline(always)]
+fn next_deadline(robot: &Robot) -> u64 {
+    robot.next_deadline().map_or(u64::MAX, Instant::as_micros)
 }
 
 #[panic_handler]

@@ -1,6 +1,6 @@
 //! The MIDI UART: 31250 baud 8N1 (UBRR = 15 at 8 MHz, as in the thesis), received by
-//! interrupt into a ring buffer, and every byte sent straight on (soft MIDI thru) from the
-//! interrupt handlers, in order, whatever the main loop is doing.
+//! interrupt into a ring buffer with each byte's arrival time, and every byte sent straight on
+//! (soft MIDI thru) from the interrupt handlers, in order, whatever the main loop is doing.
 
 use avr_device::atmega16::USART;
 use core::ptr::{addr_of, addr_of_mut, read_volatile, write_volatile};
@@ -8,10 +8,17 @@ use core::ptr::{addr_of, addr_of_mut, read_volatile, write_volatile};
 /// UBRR for 31250 baud at 8 MHz: 8 MHz / (16 · 31250) − 1.
 pub const UBRR: u8 = 15;
 
-const RX_N: usize = 64; // 20 ms of MIDI at full speed
-const TX_N: usize = 16;
+/// 10 ms of MIDI at full speed. The main loop takes a byte in well under one byte time, so
+/// the ring fills only while it is stopped (it never waits on the bus).
+const RX_N: u8 = 32;
+const TX_N: u8 = 16;
+// Powers of two: indexes are masked, so the handlers have no bounds checks (a check's call
+// would make them save every register).
+const _: () = assert!(RX_N.is_power_of_two() && TX_N.is_power_of_two());
 
-static mut RX_BUF: [u8; RX_N] = [0; RX_N];
+static mut RX_BUF: [u8; RX_N as usize] = [0; RX_N as usize];
+/// The low 16 bits of the µs clock when each byte was taken from the UART.
+static mut RX_AT: [u16; RX_N as usize] = [0; RX_N as usize];
 /// Written by the receive interrupt only.
 static mut RX_HEAD: u8 = 0;
 /// Written by the main loop only.
@@ -20,7 +27,7 @@ static mut RX_TAIL: u8 = 0;
 static mut RX_LOST: u8 = 0;
 
 // Thru: touched only by the two interrupt handlers, which never nest.
-static mut TX_BUF: [u8; TX_N] = [0; TX_N];
+static mut TX_BUF: [u8; TX_N as usize] = [0; TX_N as usize];
 static mut TX_HEAD: u8 = 0;
 static mut TX_TAIL: u8 = 0;
 
@@ -44,49 +51,51 @@ pub fn start(u: USART) {
     u.ucsrb.write(|w| unsafe { w.bits(RXCIE | RXEN | TXEN) });
 }
 
-/// The next received byte, if any.
-pub fn pop() -> Option<u8> {
+/// The next received byte, if any, with the low 16 bits of the µs clock when it arrived.
+#[inline(always)]
+pub fn pop() -> Option<(u8, u16)> {
     // SAFETY: single producer (the handler writes HEAD after the byte), single consumer.
     unsafe {
         let tail = read_volatile(addr_of!(RX_TAIL));
         if tail == read_volatile(addr_of!(RX_HEAD)) {
             return None;
         }
-        let b = read_volatile(addr_of!(RX_BUF[tail as usize]));
-        write_volatile(addr_of_mut!(RX_TAIL), (tail + 1) % RX_N as u8);
-        Some(b)
+        let i = (tail & (RX_N - 1)) as usize;
+        let b = read_volatile(addr_of!(RX_BUF[i]));
+        let at = read_volatile(addr_of!(RX_AT[i]));
+        write_volatile(addr_of_mut!(RX_TAIL), (tail + 1) % RX_N);
+        Some((b, at))
     }
-}
-
-/// Whether a received byte is waiting.
-pub fn pending() -> bool {
-    unsafe { read_volatile(addr_of!(RX_TAIL)) != read_volatile(addr_of!(RX_HEAD)) }
 }
 
 #[avr_device::interrupt(atmega16)]
 fn USART_RXC() {
     crate::probe::isr_enter();
+    // The arrival time first: the receive-complete flag rose a few cycles ago.
+    let at = crate::clock::ticks16_raw();
     let u = usart();
     while u.ucsra.read().bits() & RXC != 0 {
         let b = u.udr.read().bits();
         // SAFETY: see the statics.
         unsafe {
             let head = read_volatile(addr_of!(RX_HEAD));
-            let next = (head + 1) % RX_N as u8;
+            let next = (head + 1) % RX_N;
             if next == read_volatile(addr_of!(RX_TAIL)) {
                 let lost = read_volatile(addr_of!(RX_LOST));
                 write_volatile(addr_of_mut!(RX_LOST), lost.saturating_add(1));
             } else {
-                write_volatile(addr_of_mut!(RX_BUF[head as usize]), b);
+                let i = (head & (RX_N - 1)) as usize;
+                write_volatile(addr_of_mut!(RX_BUF[i]), b);
+                write_volatile(addr_of_mut!(RX_AT[i]), at);
                 write_volatile(addr_of_mut!(RX_HEAD), next);
             }
             // Thru: straight out if nothing is queued and the data register is free.
             if TX_HEAD == TX_TAIL && u.ucsra.read().bits() & UDRE != 0 {
                 u.udr.write(|w| w.bits(b));
             } else {
-                let next = (TX_HEAD + 1) % TX_N as u8;
+                let next = (TX_HEAD + 1) % TX_N;
                 if next != TX_TAIL {
-                    TX_BUF[TX_HEAD as usize] = b;
+                    TX_BUF[(TX_HEAD & (TX_N - 1)) as usize] = b;
                     TX_HEAD = next;
                 }
                 u.ucsrb.modify(|r, w| w.bits(r.bits() | UDRIE));
@@ -102,8 +111,9 @@ fn USART_UDRE() {
     // SAFETY: see the statics.
     unsafe {
         if TX_HEAD != TX_TAIL {
-            u.udr.write(|w| w.bits(TX_BUF[TX_TAIL as usize]));
-            TX_TAIL = (TX_TAIL + 1) % TX_N as u8;
+            u.udr
+                .write(|w| w.bits(TX_BUF[(TX_TAIL & (TX_N - 1)) as usize]));
+            TX_TAIL = (TX_TAIL + 1) % TX_N;
         }
         if TX_HEAD == TX_TAIL {
             u.ucsrb.modify(|r, w| w.bits(r.bits() & !UDRIE));

@@ -1,9 +1,9 @@
 //! Measurement pins for the hardware-in-the-loop tests, on pins the thesis's board leaves
 //! unused (it drives only PORTB low and PD6/PD7; PORTA is free):
 //!
-//! - PD2 high while the UART receive handler runs, PD4 high while the main loop decodes
-//!   and interprets, PD5 high while it writes the boards: the simulator counts the CPU
-//!   cycles spent on a message.
+//! - PD2 high while the UART receive handler runs, PD4 high while the main loop decodes,
+//!   interprets and queues board writes, PD5 high while the TWI handler runs: the simulator
+//!   counts the CPU cycles spent on a message and on a board write.
 //! - PORTA: the deepest stack seen so far, in 2-byte units (saturating at 255 = 510 bytes),
 //!   from a painted stack, refreshed about four times a second when idle.
 
@@ -18,7 +18,7 @@ const SPH: *const u8 = 0x5E as *const u8;
 
 const ISR_PIN: u8 = 1 << 2;
 const WORK_PIN: u8 = 1 << 4;
-const FLUSH_PIN: u8 = 1 << 5;
+const TWI_PIN: u8 = 1 << 5;
 
 /// Top of SRAM on the ATmega16.
 const RAMEND: u16 = 0x045F;
@@ -34,9 +34,9 @@ pub fn init() {
     unsafe {
         write_volatile(
             PORTD,
-            read_volatile(PORTD) & !(ISR_PIN | WORK_PIN | FLUSH_PIN),
+            read_volatile(PORTD) & !(ISR_PIN | WORK_PIN | TWI_PIN),
         );
-        write_volatile(DDRD, read_volatile(DDRD) | ISR_PIN | WORK_PIN | FLUSH_PIN);
+        write_volatile(DDRD, read_volatile(DDRD) | ISR_PIN | WORK_PIN | TWI_PIN);
         write_volatile(PORTA, 0);
         write_volatile(DDRA, 0xFF);
     }
@@ -97,6 +97,10 @@ pub fn work(on: bool) {
     avr_device::interrupt::free(|_| set(WORK_PIN, on))
 }
 #[inline(always)]
-pub fn flushing(on: bool) {
-    avr_device::interrupt::free(|_| set(FLUSH_PIN, on))
+pub fn twi_enter() {
+    set(TWI_PIN, true)
+}
+#[inline(always)]
+pub fn twi_exit() {
+    set(TWI_PIN, false)
 }

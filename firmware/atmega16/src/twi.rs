@@ -1,281 +1,347 @@
-//! An embedded-hal 1.0 [`I2c`] master on the ATmega16's TWI, with timeouts instead of the
-//! thesis's endless `while (!(TWCR & (1<<TWINT)));`, and bus recovery.
+//! The TWI master, interrupt-driven: board writes go into a queue and the TWI interrupt puts
+//! them on the bus one after another, while the main loop goes on decoding MIDI. Every write
+//! is one transaction `[register, lo, hi]` to one PCA9555.
 //!
-//! Clock: 83.33 kHz as in the thesis (TWBR = 10, prescaler 4 at 8 MHz):
-//! SCL = F_CPU / (16 + 2 · TWBR · 4^TWPS) = 8 MHz / 96.
-//!
-//! Every wait is bounded by Timer1 (1 µs ticks, see [`crate::clock`]). A wait that times out,
-//! or a bus error (status 0x00), disables the TWI, clocks SCL up to nine times by hand until
-//! a slave holding SDA lets go, sends a STOP and enables the TWI again. A NACK ends the
-//! transaction with a STOP; arbitration loss releases the bus (the hardware already did).
+//! - Clock: [`TWI_HZ`], the one place to change it; TWBR and the prescaler follow from it.
+//! - A NACK or a lost arbitration tries the write again, [`ATTEMPTS`] times in all; a board
+//!   that still fails is marked in [`failed`], its queued writes are dropped (they are never
+//!   sent out of order, and an initialisation's configuration write never follows a failed
+//!   output write), and the main loop initialises it again later.
+//! - No step may take longer than [`STEP_TIMEOUT_US`] (the thesis waited for ever): the main
+//!   loop calls [`check`], which frees a stuck bus (TWI off, SCL clocked by hand until SDA is
+//!   free, a STOP, TWI on) and counts a failed attempt.
 
 use avr_device::atmega16::{PORTC, TWI};
-use embedded_hal::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
+use core::ptr::{addr_of, addr_of_mut, read_volatile, write_volatile};
+use orch_boards::registers::{CONFIGURATION_0, OUTPUT_PORT_0};
 
 use crate::clock;
 
+/// The bus clock. The thesis's 83.33 kHz by default; at most 400 kHz (the PCA9555's and the
+/// ATmega16's fast mode; note that the ATmega16 datasheet asks for TWBR ≥ 10 in master mode,
+/// which at 8 MHz means at most 222 kHz).
+pub const TWI_HZ: u32 = 83_333;
+
+const F_CPU: u32 = 8_000_000;
+
+/// (TWBR, TWPS) for [`TWI_HZ`]: SCL = F_CPU / (16 + 2 · TWBR · 4^TWPS).
+const BIT_RATE: (u8, u8) = {
+    assert!(
+        TWI_HZ >= 1_000 && TWI_HZ <= 400_000,
+        "TWI_HZ: 1 kHz ..= 400 kHz"
+    );
+    let divider = (F_CPU + TWI_HZ / 2) / TWI_HZ;
+    let x = (divider - 16) / 2; // TWBR · 4^TWPS
+    let mut twps = 0;
+    while x >> (2 * twps) > 255 {
+        twps += 1;
+    }
+    assert!(twps <= 3);
+    ((x >> (2 * twps)) as u8, twps as u8)
+};
+/// TWBR (40 at 83.33 kHz: 8 MHz / 96).
+pub const TWBR: u8 = BIT_RATE.0;
+/// The prescaler bits (0: prescaler 1).
+pub const TWPS: u8 = BIT_RATE.1;
+
+/// Attempts per write before the board is set aside.
+pub const ATTEMPTS: u8 = 3;
+/// The longest a bus step (START, a byte and its acknowledge) may take: a byte takes 108 µs
+/// at 83.33 kHz, so 1 ms means the bus is stuck.
+pub const STEP_TIMEOUT_US: u16 = 1000;
+/// Half an SCL period while recovering the bus by hand (about 50 kHz).
+const RECOVERY_HALF_PERIOD_US: u16 = 10;
+
 const TWINT: u8 = 1 << 7;
-const TWEA: u8 = 1 << 6;
 const TWSTA: u8 = 1 << 5;
 const TWSTO: u8 = 1 << 4;
 const TWEN: u8 = 1 << 2;
-
-/// TWBR for 83.33 kHz at 8 MHz with prescaler 4 (the thesis's value).
-pub const TWBR: u8 = 10;
-/// TWPS = 1: prescaler 4.
-pub const TWPS: u8 = 1;
-
-/// The longest wait for one bus step (START, a byte and its ACK): a byte takes 108 µs at
-/// 83.33 kHz, so 1 ms means the bus is stuck.
-const STEP_TIMEOUT_US: u16 = 1000;
-/// The longest wait for the STOP to go out.
-const STOP_TIMEOUT_US: u16 = 300;
-/// Half an SCL period while recovering the bus by hand (about 50 kHz).
-const RECOVERY_HALF_PERIOD_US: u16 = 10;
+const TWIE: u8 = 1 << 0;
 
 // TWSR status codes (prescaler bits masked).
 const START: u8 = 0x08;
 const REP_START: u8 = 0x10;
 const MT_SLA_ACK: u8 = 0x18;
-const MT_SLA_NACK: u8 = 0x20;
 const MT_DATA_ACK: u8 = 0x28;
-const MT_DATA_NACK: u8 = 0x30;
 const ARB_LOST: u8 = 0x38;
-const MR_SLA_ACK: u8 = 0x40;
-const MR_SLA_NACK: u8 = 0x48;
-const MR_DATA_ACK: u8 = 0x50;
-const MR_DATA_NACK: u8 = 0x58;
 
-/// What went wrong on the bus.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TwiError {
-    /// The address or a data byte was not acknowledged.
-    Nack(NoAcknowledgeSource),
-    /// Another master won the bus.
-    ArbitrationLoss,
-    /// A step did not finish in time (bus held low, or a dead TWI): the bus was recovered.
-    Timeout,
-    /// An illegal START/STOP or an unexpected status: the bus was recovered.
-    Bus,
+/// Queued writes: 16 is a whole retry round for all four boards and more. A power of two.
+const Q: u8 = 16;
+const _: () = assert!(Q.is_power_of_two());
+/// Board index (bits 0..=1) and register: bit 2 set for the configuration registers.
+static mut Q_JOB: [u8; Q as usize] = [0; Q as usize];
+static mut Q_VALUE: [u16; Q as usize] = [0; Q as usize];
+/// Written by the main loop only.
+static mut Q_HEAD: u8 = 0;
+/// Written by the interrupt handler (and by [`check`] with interrupts off) only.
+static mut Q_TAIL: u8 = 0;
+/// Where the transaction at `Q_TAIL` is: 0 idle, 1 START sent, 2 address sent, 3..=5 the
+/// register and the two data bytes sent.
+static mut STEP: u8 = 0;
+/// When the current step began (low 16 bits of the µs clock).
+static mut STEP_AT: u16 = 0;
+/// Failed attempts of the write at `Q_TAIL`.
+static mut TRIES: u8 = 0;
+/// Boards set aside after [`ATTEMPTS`] failures, one bit each.
+static mut FAILED: u8 = 0;
+/// Bus recoveries done so far.
+static mut RECOVERIES: u16 = 0;
+
+/// The register byte of a queued write.
+pub const OUTPUTS: u8 = 0;
+/// A queued write to the configuration registers (`[0x06, lo, hi]`).
+pub const CONFIGURATION: u8 = 1 << 2;
+
+/// The bus's 7-bit addresses, by board index (the thesis's 0x42..0x48 in write form).
+pub const ADDRESSES: [u8; 4] = [0x21, 0x22, 0x23, 0x24];
+
+fn twi() -> &'static avr_device::atmega16::twi::RegisterBlock {
+    // SAFETY: the TWI is used only here: by the handler, and by the main loop while the
+    // handler cannot run (interrupts off, or the TWI idle and its interrupt off).
+    unsafe { &*TWI::ptr() }
 }
 
-impl embedded_hal::i2c::Error for TwiError {
-    fn kind(&self) -> ErrorKind {
-        match *self {
-            TwiError::Nack(s) => ErrorKind::NoAcknowledge(s),
-            TwiError::ArbitrationLoss => ErrorKind::ArbitrationLoss,
-            TwiError::Timeout | TwiError::Bus => ErrorKind::Bus,
+fn portc() -> &'static avr_device::atmega16::portc::RegisterBlock {
+    // SAFETY: PC0/PC1 belong to the TWI; only `recover` drives them, with interrupts off.
+    unsafe { &*PORTC::ptr() }
+}
+
+#[inline(always)]
+fn control(bits: u8) {
+    twi().twcr.write(|w| unsafe { w.bits(bits) });
+}
+
+/// Sets the bit rate and enables the TWI. Takes the TWI and PORTC.
+pub fn start(_twi: TWI, _portc: PORTC) {
+    enable();
+}
+
+fn enable() {
+    // Pins as inputs without pull-ups (the boards' bus has its own), until the TWI takes
+    // them over.
+    let p = portc();
+    p.ddrc.modify(|r, w| unsafe { w.bits(r.bits() & !0b11) });
+    p.portc.modify(|r, w| unsafe { w.bits(r.bits() & !0b11) });
+    twi().twbr.write(|w| unsafe { w.bits(TWBR) });
+    twi().twsr.write(|w| unsafe { w.bits(TWPS) });
+    control(TWEN);
+}
+
+/// Boards set aside after failing [`ATTEMPTS`] times (bit `i` = board `i`).
+#[inline(always)]
+pub fn failed() -> u8 {
+    unsafe { read_volatile(addr_of!(FAILED)) }
+}
+
+/// Takes `board` back: its writes go out again.
+pub fn clear_failed(board: u8) {
+    avr_device::interrupt::free(|_| unsafe {
+        write_volatile(addr_of_mut!(FAILED), failed() & !(1 << board));
+    });
+}
+
+/// Whether no write is queued or on the bus.
+#[inline(always)]
+pub fn idle() -> bool {
+    unsafe {
+        read_volatile(addr_of!(STEP)) == 0
+            && read_volatile(addr_of!(Q_TAIL)) == read_volatile(addr_of!(Q_HEAD))
+    }
+}
+
+/// Queues `[register, lo, hi]` for `board` (`kind` is [`OUTPUTS`] or [`CONFIGURATION`]) and
+/// starts the bus if it is idle. Waits only if the queue is full (16 writes behind).
+pub fn push(board: u8, kind: u8, value: u16) {
+    unsafe {
+        let head = read_volatile(addr_of!(Q_HEAD));
+        let next = (head + 1) % Q;
+        while next == read_volatile(addr_of!(Q_TAIL)) {
+            avr_device::asm::wdr();
+            check();
+        }
+        write_volatile(addr_of_mut!(Q_JOB[head as usize]), board | kind);
+        write_volatile(addr_of_mut!(Q_VALUE[head as usize]), value);
+        write_volatile(addr_of_mut!(Q_HEAD), next);
+        if read_volatile(addr_of!(STEP)) == 0 {
+            // Idle: the handler does not run until this START completes.
+            avr_device::interrupt::free(|_| begin());
         }
     }
 }
 
-/// The TWI master. Owns the TWI and PORTC (SCL = PC0, SDA = PC1).
-pub struct Twi {
-    twi: TWI,
-    portc: PORTC,
-    /// Bus recoveries done so far.
-    pub recoveries: u16,
+/// Starts the next queued write of a board that is not set aside, or stays idle. Called by
+/// the main loop with interrupts off, while the handler is idle (or reported an error).
+fn begin() {
+    unsafe {
+        let head = read_volatile(addr_of!(Q_HEAD));
+        let mut tail = Q_TAIL;
+        while tail != head && FAILED & (1 << (Q_JOB[tail as usize] & 3)) != 0 {
+            tail = (tail + 1) % Q;
+        }
+        Q_TAIL = tail;
+        TRIES = 0;
+        STEP = 0;
+        if tail != head {
+            restart();
+        }
+    }
 }
 
-impl Twi {
-    /// Sets the bit rate and enables the TWI.
-    pub fn new(twi: TWI, portc: PORTC) -> Self {
-        let mut this = Self {
-            twi,
-            portc,
-            recoveries: 0,
+/// Sends a START for the write at `Q_TAIL`, once the last STOP is out. Main loop only.
+fn restart() {
+    let t0 = clock::ticks16_raw();
+    while twi().twcr.read().bits() & TWSTO != 0
+        && clock::ticks16_raw().wrapping_sub(t0) < STEP_TIMEOUT_US
+    {}
+    unsafe {
+        STEP = 1;
+        STEP_AT = clock::ticks16_raw();
+    }
+    control(TWINT | TWSTA | TWEN | TWIE);
+}
+
+/// The write at `Q_TAIL` failed (NACK, lost arbitration, a bus error, or a timeout after a
+/// recovery): try it again, or set its board aside and go on with the next write. Main loop
+/// only, interrupts off.
+fn fail() {
+    unsafe {
+        TRIES += 1;
+        if TRIES < ATTEMPTS {
+            restart();
+            return;
+        }
+        FAILED |= 1 << (Q_JOB[Q_TAIL as usize] & 3);
+        // `begin` skips the board's queued writes.
+        begin();
+    }
+}
+
+/// `STEP` when the handler met a NACK, a lost arbitration or a bus error: it has let go of
+/// the bus (a STOP where it may) and left the rest to [`check`].
+const STEP_FAILED: u8 = 0xFF;
+
+/// The TWI interrupt: only the steps of a write that goes well, and straight on to the next
+/// queued write. It calls nothing (so it saves few registers); what goes wrong, and a next
+/// write for a board set aside, are the main loop's, in [`check`].
+#[avr_device::interrupt(atmega16)]
+fn TWI() {
+    crate::probe::twi_enter();
+    let t = twi();
+    let status = t.twsr.read().bits() & 0xF8;
+    unsafe {
+        let step = STEP;
+        // Masked (Q is a power of two): no bounds check, so no call and few saved registers.
+        let tail = (Q_TAIL & (Q - 1)) as usize;
+        let ok = match step {
+            1 => status == START || status == REP_START,
+            2 => status == MT_SLA_ACK,
+            _ => status == MT_DATA_ACK,
         };
-        this.enable();
-        this
-    }
-
-    fn enable(&mut self) {
-        // Pins as inputs without pull-ups (the boards' bus has its own), until the TWI
-        // takes them over.
-        self.portc
-            .ddrc
-            .modify(|r, w| unsafe { w.bits(r.bits() & !0b11) });
-        self.portc
-            .portc
-            .modify(|r, w| unsafe { w.bits(r.bits() & !0b11) });
-        self.twi.twbr.write(|w| unsafe { w.bits(TWBR) });
-        self.twi.twsr.write(|w| unsafe { w.bits(TWPS) });
-        self.twi.twcr.write(|w| unsafe { w.bits(TWEN) });
-    }
-
-    fn control(&mut self, bits: u8) {
-        self.twi.twcr.write(|w| unsafe { w.bits(bits) });
-    }
-
-    /// Waits for TWINT, at most [`STEP_TIMEOUT_US`], and returns the status.
-    fn wait(&mut self) -> Result<u8, TwiError> {
-        let t0 = clock::ticks16();
-        while self.twi.twcr.read().bits() & TWINT == 0 {
-            if clock::ticks16().wrapping_sub(t0) > STEP_TIMEOUT_US {
-                return Err(TwiError::Timeout);
-            }
-        }
-        Ok(self.twi.twsr.read().bits() & 0xF8)
-    }
-
-    fn start(&mut self, repeated: bool) -> Result<(), TwiError> {
-        self.control(TWINT | TWSTA | TWEN);
-        match self.wait()? {
-            START => Ok(()),
-            REP_START if repeated => Ok(()),
-            ARB_LOST => Err(TwiError::ArbitrationLoss),
-            _ => Err(TwiError::Bus),
-        }
-    }
-
-    fn send(&mut self, byte: u8) -> Result<u8, TwiError> {
-        self.twi.twdr.write(|w| unsafe { w.bits(byte) });
-        self.control(TWINT | TWEN);
-        self.wait()
-    }
-
-    fn stop(&mut self) -> Result<(), TwiError> {
-        self.control(TWINT | TWSTO | TWEN);
-        let t0 = clock::ticks16();
-        while self.twi.twcr.read().bits() & TWSTO != 0 {
-            if clock::ticks16().wrapping_sub(t0) > STOP_TIMEOUT_US {
-                return Err(TwiError::Timeout);
-            }
-        }
-        Ok(())
-    }
-
-    fn address(&mut self, address: u8, read: bool) -> Result<(), TwiError> {
-        let status = self.send((address << 1) | read as u8)?;
-        match (status, read) {
-            (MT_SLA_ACK, false) | (MR_SLA_ACK, true) => Ok(()),
-            (MT_SLA_NACK, false) | (MR_SLA_NACK, true) => {
-                Err(TwiError::Nack(NoAcknowledgeSource::Address))
-            }
-            (ARB_LOST, _) => Err(TwiError::ArbitrationLoss),
-            _ => Err(TwiError::Bus),
-        }
-    }
-
-    fn run(&mut self, address: u8, operations: &mut [Operation<'_>]) -> Result<(), TwiError> {
-        let mut started: Option<bool> = None; // Some(read) once addressed
-        let count = operations.len();
-        for i in 0..count {
-            let is_read = matches!(operations[i], Operation::Read(_));
-            let next_is_read = i + 1 < count && matches!(operations[i + 1], Operation::Read(_));
-            if started != Some(is_read) {
-                self.start(started.is_some())?;
-                self.address(address, is_read)?;
-                started = Some(is_read);
-            }
-            match &mut operations[i] {
-                Operation::Write(bytes) => {
-                    for &b in bytes.iter() {
-                        match self.send(b)? {
-                            MT_DATA_ACK => {}
-                            MT_DATA_NACK => return Err(TwiError::Nack(NoAcknowledgeSource::Data)),
-                            ARB_LOST => return Err(TwiError::ArbitrationLoss),
-                            _ => return Err(TwiError::Bus),
-                        }
+        if !ok {
+            // A lost arbitration has released the bus already; otherwise a STOP.
+            t.twcr.write(|w| {
+                w.bits(if status == ARB_LOST {
+                    TWINT | TWEN
+                } else {
+                    TWINT | TWSTO | TWEN
+                })
+            });
+            STEP = STEP_FAILED;
+        } else if step < 5 {
+            let job = Q_JOB[tail];
+            let byte = match step {
+                1 => (ADDRESSES[0] + (job & 3)) << 1,
+                2 => {
+                    if job & CONFIGURATION != 0 {
+                        CONFIGURATION_0
+                    } else {
+                        OUTPUT_PORT_0
                     }
                 }
-                Operation::Read(buf) => {
-                    let n = buf.len();
-                    for (j, slot) in buf.iter_mut().enumerate() {
-                        // NACK the last byte before a STOP or a repeated START.
-                        let last = j + 1 == n && !next_is_read;
-                        self.control(TWINT | TWEN | if last { 0 } else { TWEA });
-                        match self.wait()? {
-                            MR_DATA_ACK | MR_DATA_NACK => {}
-                            ARB_LOST => return Err(TwiError::ArbitrationLoss),
-                            _ => return Err(TwiError::Bus),
-                        }
-                        *slot = self.twi.twdr.read().bits();
-                    }
-                }
-            }
-        }
-        if started.is_some() {
-            self.stop()?;
-        }
-        Ok(())
-    }
-
-    /// Frees a stuck bus: TWI off, up to nine SCL pulses by hand until SDA is high, a STOP,
-    /// TWI back on.
-    pub fn recover(&mut self) {
-        self.recoveries = self.recoveries.wrapping_add(1);
-        self.twi.twcr.write(|w| unsafe { w.bits(0) });
-        // Open drain by hand: a line is released (input, pulled up outside) or driven low
-        // (output, PORT bit 0).
-        self.portc
-            .portc
-            .modify(|r, w| unsafe { w.bits(r.bits() & !0b11) });
-        self.portc
-            .ddrc
-            .modify(|r, w| unsafe { w.bits(r.bits() & !0b11) });
-        for _ in 0..9 {
-            if self.portc.pinc.read().bits() & 0b10 != 0 {
-                break; // SDA is free
-            }
-            self.scl(false);
-            self.scl(true);
-        }
-        // STOP: SDA low while SCL is high, then SDA released.
-        self.sda(false);
-        self.scl(true);
-        self.sda(true);
-        self.enable();
-    }
-
-    fn scl(&mut self, high: bool) {
-        self.line(0b01, high);
-    }
-
-    fn sda(&mut self, high: bool) {
-        self.line(0b10, high);
-    }
-
-    fn line(&mut self, mask: u8, high: bool) {
-        self.portc.ddrc.modify(|r, w| unsafe {
-            w.bits(if high {
-                r.bits() & !mask
+                3 => Q_VALUE[tail] as u8,
+                _ => (Q_VALUE[tail] >> 8) as u8,
+            };
+            t.twdr.write(|w| w.bits(byte));
+            STEP = step + 1;
+            STEP_AT = clock::ticks16_raw();
+            t.twcr.write(|w| w.bits(TWINT | TWEN | TWIE));
+        } else {
+            // Done. The next write's START right after the STOP, unless its board is set
+            // aside (then the main loop skips it).
+            let next = (Q_TAIL + 1) % Q;
+            Q_TAIL = next;
+            TRIES = 0;
+            if next != read_volatile(addr_of!(Q_HEAD))
+                && FAILED & (1 << (Q_JOB[(next & (Q - 1)) as usize] & 3)) == 0
+            {
+                STEP = 1;
+                STEP_AT = clock::ticks16_raw();
+                t.twcr
+                    .write(|w| w.bits(TWINT | TWSTO | TWSTA | TWEN | TWIE));
             } else {
-                r.bits() | mask
-            })
-        });
-        clock::delay_us(RECOVERY_HALF_PERIOD_US);
-    }
-}
-
-impl ErrorType for Twi {
-    type Error = TwiError;
-}
-
-impl I2c for Twi {
-    fn transaction(
-        &mut self,
-        address: u8,
-        operations: &mut [Operation<'_>],
-    ) -> Result<(), Self::Error> {
-        let result = self.run(address, operations);
-        match result {
-            Ok(()) => Ok(()),
-            Err(TwiError::Nack(s)) => {
-                if self.stop().is_err() {
-                    self.recover();
-                }
-                Err(TwiError::Nack(s))
-            }
-            // The hardware has released the bus already.
-            Err(TwiError::ArbitrationLoss) => {
-                self.control(TWINT | TWEN);
-                Err(TwiError::ArbitrationLoss)
-            }
-            Err(e) => {
-                self.recover();
-                Err(e)
+                STEP = 0;
+                t.twcr.write(|w| w.bits(TWINT | TWSTO | TWEN));
             }
         }
     }
+    crate::probe::twi_exit();
+}
+
+/// The main loop's part of the bus, called on every pass: retries and gives up after a
+/// failed step, starts a write the handler left queued, and recovers the bus when a step
+/// has taken longer than [`STEP_TIMEOUT_US`] (a bus held low, a dead TWI), counting a failed
+/// attempt.
+#[inline(always)]
+pub fn check() {
+    if idle() {
+        return;
+    }
+    avr_device::interrupt::free(|_| unsafe {
+        match STEP {
+            0 => begin(),
+            STEP_FAILED => fail(),
+            _ if clock::ticks16_raw().wrapping_sub(STEP_AT) > STEP_TIMEOUT_US => {
+                recover();
+                fail();
+            }
+            _ => {}
+        }
+    });
+}
+
+/// Frees a stuck bus: TWI off, up to nine SCL pulses by hand until SDA is high, a STOP,
+/// TWI back on. About 200 µs, with interrupts off.
+#[inline(never)]
+fn recover() {
+    unsafe { RECOVERIES = RECOVERIES.wrapping_add(1) };
+    control(0);
+    // Open drain by hand: a line is released (input, pulled up outside) or driven low
+    // (output, PORT bit 0).
+    let p = portc();
+    p.portc.modify(|r, w| unsafe { w.bits(r.bits() & !0b11) });
+    p.ddrc.modify(|r, w| unsafe { w.bits(r.bits() & !0b11) });
+    for _ in 0..9 {
+        if p.pinc.read().bits() & 0b10 != 0 {
+            break; // SDA is free
+        }
+        line(0b01, false);
+        line(0b01, true);
+    }
+    // STOP: SDA low while SCL is high, then SDA released.
+    line(0b10, false);
+    line(0b01, true);
+    line(0b10, true);
+    enable();
+}
+
+fn line(mask: u8, high: bool) {
+    portc().ddrc.modify(|r, w| unsafe {
+        w.bits(if high {
+            r.bits() & !mask
+        } else {
+            r.bits() | mask
+        })
+    });
+    let t0 = clock::ticks16_raw();
+    while clock::ticks16_raw().wrapping_sub(t0) < RECOVERY_HALF_PERIOD_US {}
 }

@@ -1,0 +1,281 @@
+//! orch on a Raspberry Pi Pico (RP2040, embassy).
+//!
+//! - MIDI in from USB (a USB-MIDI device, one cable) and from a DIN socket on UART0 RX
+//!   (GP1, 31250 baud 8N1); every DIN byte goes out again at once on UART0 TX (GP0): MIDI
+//!   thru, as the thesis's board passed its stream on to the flute robot.
+//! - orch-core's interpreter and safety guard with the thesis's keyboard and boards
+//!   (`Interpreter::thesis`), time from embassy-time (µs). DIN bytes go through its decoder;
+//!   a USB-MIDI event carries a whole message, decoded apart so that it never splits a DIN
+//!   message's running status.
+//! - The four PCA9555 finger boards at 0x21..=0x24 on I2C0 (GP4 SDA, GP5 SCL) at 400 kHz,
+//!   with orch-boards' async driver: each board initialised outputs-0 FIRST, THEN outputs;
+//!   one write per changed board; 3 attempts, then the board is set aside and initialised
+//!   again every 10 ms with its frame.
+//! - The watchdog (0.5 s), fed by the interpreter loop: a hung loop resets the Pico, and
+//!   power-up releases every key.
+#![no_std]
+#![no_main]
+
+use core::convert::Infallible;
+
+use embassy_embedded_hal::shared_bus::asynch::i2c::I2cDevice;
+use embassy_executor::Spawner;
+use embassy_futures::select::{select, Either};
+use embassy_rp::bind_interrupts;
+use embassy_rp::i2c::{self, I2c};
+use embassy_rp::peripherals::{I2C0, UART0, USB};
+use embassy_rp::uart::{
+    self, BufferedInterruptHandler, BufferedUart, BufferedUartRx, BufferedUartTx,
+};
+use embassy_rp::usb::{self, Driver};
+use embassy_rp::watchdog::Watchdog;
+use embassy_sync::blocking_mutex::raw::{CriticalSectionRawMutex, NoopRawMutex};
+use embassy_sync::channel::Channel;
+use embassy_sync::mutex::Mutex;
+use embassy_time::{Duration, Instant as Clock, Timer};
+use embassy_usb::class::midi::MidiClass;
+use embassy_usb::UsbDevice;
+use embedded_io_async::{Read, Write};
+use orch_boards::asynch::Pca9555Async;
+use orch_core::{BoardId, Decoder, FingerBoards, Instant, Interpreter};
+use static_cell::StaticCell;
+
+bind_interrupts!(struct Irqs {
+    UART0_IRQ => BufferedInterruptHandler<UART0>;
+    I2C0_IRQ => i2c::InterruptHandler<I2C0>;
+    USBCTRL_IRQ => usb::InterruptHandler<USB>;
+});
+
+/// The boards' 7-bit addresses (the thesis's 0x42..0x48 in write form).
+const ADDRESSES: [u8; 4] = [0x21, 0x22, 0x23, 0x24];
+/// The I2C clock: the PCA9555's fastest.
+const I2C_HZ: u32 = 400_000;
+/// Attempts per board write before the board is set aside.
+const ATTEMPTS: u8 = 3;
+/// How often boards set aside are initialised again.
+const RETRY: Duration = Duration::from_millis(10);
+/// The watchdog's timeout.
+const WATCHDOG: Duration = Duration::from_millis(500);
+
+/// MIDI in, in arrival order, with the µs clock at arrival.
+enum Input {
+    /// One byte from the DIN socket.
+    Din(u8, u64),
+    /// The MIDI bytes of one USB-MIDI event packet (1 to 3).
+    Usb([u8; 3], u8, u64),
+}
+
+static INPUT: Channel<CriticalSectionRawMutex, Input, 64> = Channel::new();
+
+type Bus = Mutex<NoopRawMutex, I2c<'static, I2C0, i2c::Async>>;
+type Board = Pca9555Async<I2cDevice<'static, NoopRawMutex, I2c<'static, I2C0, i2c::Async>>>;
+
+fn now_us() -> u64 {
+    Clock::now().as_micros()
+}
+
+#[embassy_executor::main]
+async fn main(spawner: Spawner) {
+    let p = embassy_rp::init(Default::default());
+    let mut watchdog = Watchdog::new(p.WATCHDOG);
+    watchdog.start(WATCHDOG);
+
+    // DIN MIDI in and thru on UART0.
+    static TX_BUF: StaticCell<[u8; 64]> = StaticCell::new();
+    static RX_BUF: StaticCell<[u8; 64]> = StaticCell::new();
+    let mut config = uart::Config::default();
+    config.baudrate = 31_250;
+    let din = BufferedUart::new(
+        p.UART0,
+        p.PIN_0,
+        p.PIN_1,
+        Irqs,
+        TX_BUF.init([0; 64]),
+        RX_BUF.init([0; 64]),
+        config,
+    );
+    let (thru, din_rx) = din.split();
+    spawner.spawn(din_task(din_rx, thru).expect("one DIN task"));
+
+    // USB-MIDI device.
+    let driver = Driver::new(p.USB, Irqs);
+    let mut usb_config = embassy_usb::Config::new(0x1209, 0x0001);
+    usb_config.manufacturer = Some("orch");
+    usb_config.product = Some("orch piano robot");
+    usb_config.max_power = 100;
+    static CONFIG_DESC: StaticCell<[u8; 256]> = StaticCell::new();
+    static BOS_DESC: StaticCell<[u8; 64]> = StaticCell::new();
+    static CONTROL_BUF: StaticCell<[u8; 64]> = StaticCell::new();
+    let mut builder = embassy_usb::Builder::new(
+        driver,
+        usb_config,
+        CONFIG_DESC.init([0; 256]),
+        BOS_DESC.init([0; 64]),
+        &mut [],
+        CONTROL_BUF.init([0; 64]),
+    );
+    let midi = MidiClass::new(&mut builder, 1, 1, 64);
+    let usb = builder.build();
+    spawner.spawn(usb_task(usb).expect("one USB task"));
+    spawner.spawn(usb_midi_task(midi).expect("one USB-MIDI task"));
+
+    // The finger boards.
+    let mut i2c_config = i2c::Config::default();
+    i2c_config.frequency = I2C_HZ;
+    static BUS: StaticCell<Bus> = StaticCell::new();
+    let bus = BUS.init(Mutex::new(I2c::new_async(
+        p.I2C0, p.PIN_5, p.PIN_4, Irqs, i2c_config,
+    )));
+    let mut boards: [Board; 4] = ADDRESSES.map(|a| Pca9555Async::new(I2cDevice::new(bus), a));
+
+    interpret(&mut boards, &mut watchdog).await
+}
+
+/// The interpreter loop: MIDI in, the guard's timers, the boards, the watchdog.
+async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog) -> ! {
+    let mut robot = Interpreter::thesis();
+    let mut usb_decoder: Decoder = Decoder::new();
+    let mut failed: u8 = 0;
+    for (i, b) in boards.iter_mut().enumerate() {
+        if b.init().await.is_err() {
+            failed |= 1 << i;
+        }
+    }
+    let mut retry_at = Clock::now() + RETRY;
+    loop {
+        watchdog.feed(WATCHDOG);
+        // Wake for input, the guard's next deadline, a retry round, or the watchdog.
+        let mut wake = Clock::now() + WATCHDOG / 4;
+        if let Some(d) = robot.next_deadline() {
+            wake = wake.min(Clock::from_micros(d.as_micros()));
+        }
+        if failed != 0 {
+            wake = wake.min(retry_at);
+        }
+        match select(INPUT.receive(), Timer::at(wake)).await {
+            Either::First(Input::Din(byte, at)) => {
+                advance(&mut robot, at);
+                robot.feed(byte, Instant::from_micros(at));
+            }
+            Either::First(Input::Usb(bytes, len, at)) => {
+                advance(&mut robot, at);
+                for &b in &bytes[..len as usize] {
+                    for message in usb_decoder.push(b) {
+                        robot.handle(message, Instant::from_micros(at));
+                    }
+                }
+            }
+            Either::Second(()) => advance(&mut robot, now_us()),
+        }
+        write(&mut robot, boards, &mut failed).await;
+        if failed != 0 && Clock::now() >= retry_at {
+            for (i, b) in boards.iter_mut().enumerate() {
+                if failed & (1 << i) != 0 && b.init().await.is_ok() {
+                    failed &= !(1 << i);
+                    let outputs = robot.frame().outputs(i);
+                    if outputs != 0 && b.set_outputs(outputs).await.is_err() {
+                        failed |= 1 << i;
+                    }
+                }
+            }
+            retry_at = Clock::now() + RETRY;
+        }
+    }
+}
+
+/// Runs the guard's timers due by `at`, each at its own deadline.
+fn advance(robot: &mut Interpreter, at: u64) {
+    while let Some(d) = robot.next_deadline().filter(|d| d.as_micros() <= at) {
+        robot.tick(d);
+    }
+}
+
+/// The frame's changed boards, as orch-core's flush hands them over (it takes them as
+/// written; the async writes follow).
+#[derive(Default)]
+struct Changed([Option<u16>; 4]);
+
+impl FingerBoards for Changed {
+    type Error = Infallible;
+    fn write_board(&mut self, board: BoardId, outputs: u16) -> Result<(), Infallible> {
+        self.0[board.index as usize & 3] = Some(outputs);
+        Ok(())
+    }
+}
+
+/// Writes every changed board, [`ATTEMPTS`] times at most; a board that fails is set aside
+/// in `failed` (the retry round initialises it again and sends its frame).
+async fn write(robot: &mut Interpreter, boards: &mut [Board; 4], failed: &mut u8) {
+    let mut changed = Changed::default();
+    let _ = robot.flush(&mut changed);
+    for (i, outputs) in changed.0.into_iter().enumerate() {
+        let Some(outputs) = outputs else { continue };
+        if *failed & (1 << i) != 0 {
+            continue;
+        }
+        let mut ok = false;
+        for _ in 0..ATTEMPTS {
+            if boards[i].set_outputs(outputs).await.is_ok() {
+                ok = true;
+                break;
+            }
+        }
+        if !ok {
+            *failed |= 1 << i;
+        }
+    }
+}
+
+#[embassy_executor::task]
+async fn usb_task(mut usb: UsbDevice<'static, Driver<'static, USB>>) -> ! {
+    usb.run().await
+}
+
+/// USB-MIDI event packets: 4 bytes each, the code index number in the low nibble of the
+/// first says how many MIDI bytes follow.
+#[embassy_executor::task]
+async fn usb_midi_task(mut midi: MidiClass<'static, Driver<'static, USB>>) -> ! {
+    let mut buf = [0u8; 64];
+    loop {
+        midi.wait_connection().await;
+        while let Ok(n) = midi.read_packet(&mut buf).await {
+            let at = now_us();
+            for event in buf[..n].chunks_exact(4) {
+                let len = match event[0] & 0x0F {
+                    0x5 | 0xF => 1,
+                    0x2 | 0x6 | 0xC | 0xD => 2,
+                    0x3 | 0x4 | 0x7 | 0x8 | 0x9 | 0xA | 0xB | 0xE => 3,
+                    _ => 0, // reserved codes carry nothing
+                };
+                if len > 0 {
+                    INPUT
+                        .send(Input::Usb([event[1], event[2], event[3]], len, at))
+                        .await;
+                }
+            }
+        }
+    }
+}
+
+/// DIN MIDI in: every byte thru at once, then to the interpreter.
+#[embassy_executor::task]
+async fn din_task(mut rx: BufferedUartRx, mut thru: BufferedUartTx) -> ! {
+    let mut buf = [0u8; 16];
+    loop {
+        let Ok(n) = rx.read(&mut buf).await else {
+            continue; // a framing or overrun error: the decoder resynchronises
+        };
+        let at = now_us();
+        let _ = thru.write_all(&buf[..n]).await;
+        for &b in &buf[..n] {
+            INPUT.send(Input::Din(b, at)).await;
+        }
+    }
+}
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    // The watchdog resets the Pico, and power-up releases every key.
+    cortex_m::interrupt::disable();
+    loop {}
+}
