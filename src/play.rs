@@ -245,8 +245,8 @@ pub fn went_wrong(song: &Song, played: &Played, tempo: Tempo) -> Vec<Wrong> {
                 channel: r.channel + 1,
                 outcome: r.outcome.name(),
                 ms: match r.outcome {
-                    Outcome::Late { by_ms } | Outcome::Early { by_ms } => {
-                        Some((by_ms * 1000.0).round() / 1000.0)
+                    Outcome::Late { by_us } | Outcome::Early { by_us } => {
+                        Some(by_us as f64 / 1000.0)
                     }
                     _ => None,
                 },

@@ -1,10 +1,13 @@
 //! The account of every note: what the interpreter decided, and when its strike sounded.
 //!
 //! [`Ledger`] takes, in order, the Note-Ons delivered to a robot (with their score note),
-//! the interpreter's [`NoteEvent`]s, and at the end the virtual robot's presses. Each note
-//! gets exactly one [`Outcome`]. Nothing is guessed from key phases: the interpreter says
+//! the interpreter's [`NoteEvent`]s, and the virtual robot's presses as they resolve. Each
+//! note gets exactly one [`Outcome`]. Nothing is guessed from key phases: the interpreter says
 //! whether a note struck, joined or was dropped and why, and the robot says when the strike
 //! sounded.
+//!
+//! Memory: 24 bytes a note, plus the strikes of each key not yet matched to a press (a
+//! handful); presses are matched as they come and not kept.
 
 use std::collections::VecDeque;
 
@@ -16,23 +19,23 @@ use crate::plan::NoteId;
 /// How far from its score time a strike may sound and still be on time: 1 ms.
 pub const ON_TIME_US: i64 = 1_000;
 
-/// What became of one note.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// What became of one note. Times are in µs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Outcome {
     /// Its own strike sounded within 1 ms of its score time.
     OnTime {
-        /// Sound − score, ms.
-        error_ms: f64,
+        /// Sound − score, µs.
+        error_us: i32,
     },
     /// Its own strike sounded later than that.
     Late {
-        /// Sound − score, ms.
-        by_ms: f64,
+        /// Sound − score, µs.
+        by_us: i32,
     },
     /// Its own strike sounded earlier than 1 ms before its score time.
     Early {
-        /// Score − sound, ms.
-        by_ms: f64,
+        /// Score − sound, µs.
+        by_us: i32,
     },
     /// Struck together with another note on the same key at the same score time (a doubling,
     /// a fold collision): that note's strike is its sound.
@@ -58,53 +61,49 @@ impl Outcome {
             Outcome::Unmatched => "unmatched",
         }
     }
+
+    /// |sound − score| of a struck note, ms.
+    pub fn error_ms(&self) -> Option<f64> {
+        match *self {
+            Outcome::OnTime { error_us } => Some(error_us.unsigned_abs() as f64 / 1000.0),
+            Outcome::Late { by_us } | Outcome::Early { by_us } => Some(by_us as f64 / 1000.0),
+            _ => None,
+        }
+    }
 }
 
-/// One score note and what became of it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One score note and what became of it: 24 bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct NoteRecord {
-    /// Its place among the score's Note-Ons.
-    pub id: NoteId,
-    /// Its channel (0..=15) and note.
+    /// When the score wants it to sound, wall µs.
+    pub score_at_us: i64,
+    /// What became of it.
+    pub outcome: Outcome,
+    /// Its channel (0..=15).
     pub channel: u8,
     /// The note.
     pub note: u8,
-    /// When the score wants it to sound, wall µs.
-    pub score_at_us: i64,
     /// Where it landed, if it has a key.
     pub landing: Option<Landing>,
-    /// What became of it.
-    pub outcome: Outcome,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum State {
-    Unsent,
-    Waiting,
-    Struck { key: u8, at_us: u64 },
-    Done(Outcome),
-}
-
-#[derive(Clone, Copy, Debug)]
-struct Entry {
-    channel: u8,
-    note: u8,
-    score_at: i64,
-    landing: Option<Landing>,
-    state: State,
-}
+/// The outcome of a note not delivered yet, or waiting to strike: if the account closes so, it
+/// was stopped.
+const PENDING: Outcome = Outcome::Dropped(DropReason::Stopped);
+/// The outcome of a note that struck, until a press sounds for it.
+const STRUCK: Outcome = Outcome::Unmatched;
 
 /// The account. See the [module notes](self).
 #[derive(Debug, Default)]
 pub struct Ledger {
-    notes: Vec<Entry>,
+    notes: Vec<NoteRecord>,
     /// Note-Ons delivered whose first event has not come yet.
     in_flight: VecDeque<NoteId>,
     /// Per key: the note whose strike it is, and the note waiting to strike.
     owner: Vec<Option<NoteId>>,
     waiting: Vec<Option<NoteId>>,
-    /// Per key: strikes in order (note, instant).
-    strikes: Vec<Vec<(NoteId, u64)>>,
+    /// Per key: strikes (note, instant) not yet matched to a press, oldest first.
+    strikes: Vec<VecDeque<(NoteId, u64)>>,
     restrikes_waited: u64,
 }
 
@@ -114,21 +113,24 @@ impl Ledger {
         Self {
             owner: vec![None; keys],
             waiting: vec![None; keys],
-            strikes: vec![Vec::new(); keys],
+            strikes: vec![VecDeque::new(); keys],
             ..Self::default()
         }
     }
 
-    fn entry(&mut self, id: NoteId) -> &mut Entry {
+    fn entry(&mut self, id: NoteId) -> &mut NoteRecord {
         let i = id as usize;
-        while self.notes.len() <= i {
-            self.notes.push(Entry {
-                channel: 0,
-                note: 0,
-                score_at: 0,
-                landing: None,
-                state: State::Unsent,
-            });
+        if self.notes.len() <= i {
+            self.notes.resize(
+                i + 1,
+                NoteRecord {
+                    score_at_us: 0,
+                    outcome: PENDING,
+                    channel: 0,
+                    note: 0,
+                    landing: None,
+                },
+            );
         }
         &mut self.notes[i]
     }
@@ -138,7 +140,7 @@ impl Ledger {
         let e = self.entry(id);
         e.channel = channel;
         e.note = note;
-        e.score_at = score_at_us;
+        e.score_at_us = score_at_us;
     }
 
     /// Its Note-On was delivered to the robot (its first event comes when the robot decodes it).
@@ -148,7 +150,7 @@ impl Ledger {
 
     /// The planner dropped it.
     pub fn dropped(&mut self, id: NoteId, reason: DropReason) {
-        self.entry(id).state = State::Done(Outcome::Dropped(reason));
+        self.entry(id).outcome = Outcome::Dropped(reason);
     }
 
     /// Re-strikes that waited for their key's rest.
@@ -170,9 +172,7 @@ impl Ledger {
                 let Some(id) = self.in_flight.pop_front() else {
                     return;
                 };
-                let e = self.entry(id);
-                e.landing = Some(at);
-                e.state = State::Waiting;
+                self.entry(id).landing = Some(at);
                 if let Some(w) = self.waiting.get_mut(at.key as usize) {
                     *w = Some(id);
                 }
@@ -185,20 +185,20 @@ impl Ledger {
                 };
                 let k = at.key as usize;
                 let owner = self.waiting[k].or(self.owner[k]);
-                let score_at = self.entry(id).score_at;
+                let score_at = self.entry(id).score_at_us;
                 // A unison: the strike it joins is for the same score instant. (With no score,
                 // as for live input, the interpreter's own judgement: it joined the strike.)
-                let unison = match owner.map(|o| self.notes[o as usize].score_at) {
+                let unison = match owner.map(|o| self.notes[o as usize].score_at_us) {
                     Some(s) => s == score_at,
                     None => with_strike,
                 };
                 let e = self.entry(id);
                 e.landing = Some(at);
-                e.state = State::Done(if unison {
+                e.outcome = if unison {
                     Outcome::Unison
                 } else {
                     Outcome::Joined
-                });
+                };
             }
             NoteEvent::Dropped { at, reason, .. } => {
                 let Some(id) = self.in_flight.pop_front() else {
@@ -206,7 +206,7 @@ impl Ledger {
                 };
                 let e = self.entry(id);
                 e.landing = at;
-                e.state = State::Done(Outcome::Dropped(reason));
+                e.outcome = Outcome::Dropped(reason);
             }
             NoteEvent::WaitOver { key } => {
                 if let Some(id) = self.waiting.get_mut(key as usize).and_then(Option::take) {
@@ -216,86 +216,69 @@ impl Ledger {
             }
             NoteEvent::WaitEnded { key, reason } => {
                 if let Some(id) = self.waiting.get_mut(key as usize).and_then(Option::take) {
-                    self.entry(id).state = State::Done(Outcome::Dropped(reason));
+                    self.entry(id).outcome = Outcome::Dropped(reason);
                 }
             }
         }
     }
 
     fn strike(&mut self, id: NoteId, key: u8, t_us: u64) {
-        self.entry(id).state = State::Struck { key, at_us: t_us };
+        self.entry(id).outcome = STRUCK;
         if let Some(o) = self.owner.get_mut(key as usize) {
             *o = Some(id);
         }
         if let Some(s) = self.strikes.get_mut(key as usize) {
-            s.push((id, t_us));
+            s.push_back((id, t_us));
         }
     }
 
-    /// Closes the account with the virtual robot's presses: each strike is matched to the
-    /// first press of its key that began at or after it and before the key's next strike.
-    /// Notes never delivered, or delivered but not yet decoded, are stopped. `total` is the
-    /// number of notes in the score.
+    /// A press of the virtual robot resolved (its pin went low). Presses of one key come in
+    /// order. A strike is matched to the first press of its key that began at or after it and
+    /// before the key's next strike; a strike passed over stays unmatched.
+    pub fn press(&mut self, p: &Press) {
+        let Some(queue) = self.strikes.get_mut(p.key as usize) else {
+            return;
+        };
+        let h = p.pin_high.as_micros();
+        // Strikes whose next strike came before this press found no press of their own.
+        while queue.len() >= 2 && queue[1].1 <= h {
+            queue.pop_front();
+        }
+        let Some(&(id, at)) = queue.front() else {
+            return;
+        };
+        if at > h {
+            return; // a press before any waiting strike: not a note's
+        }
+        queue.pop_front();
+        let e = &mut self.notes[id as usize];
+        e.outcome = match p.sounded {
+            Some(t) => {
+                let err = (t.as_nanos() / 1000) as i64 - e.score_at_us;
+                let err = err.clamp(i32::MIN as i64, i32::MAX as i64) as i32;
+                if err as i64 > ON_TIME_US {
+                    Outcome::Late { by_us: err }
+                } else if (err as i64) < -ON_TIME_US {
+                    Outcome::Early { by_us: -err }
+                } else {
+                    Outcome::OnTime { error_us: err }
+                }
+            }
+            None => Outcome::Unmatched,
+        };
+    }
+
+    /// Closes the account with the presses not handed in yet. `total` is the number of notes
+    /// in the score: notes never delivered, or delivered but not decoded yet, were stopped.
     pub fn close(mut self, presses: &[Press], total: usize) -> Vec<NoteRecord> {
         if total > 0 {
             self.entry(total as u32 - 1);
         }
-        let mut by_key: Vec<Vec<&Press>> = vec![Vec::new(); self.strikes.len()];
-        for p in presses {
-            if let Some(v) = by_key.get_mut(p.key as usize) {
-                v.push(p);
-            }
-        }
-        for v in &mut by_key {
-            v.sort_by_key(|p| p.pin_high);
-        }
-        for (key, strikes) in self.strikes.iter().enumerate() {
-            let presses = &by_key[key];
-            let mut next = 0;
-            for (i, &(id, at)) in strikes.iter().enumerate() {
-                let before = strikes.get(i + 1).map_or(u64::MAX, |s| s.1);
-                while next < presses.len() && presses[next].pin_high.as_micros() < at {
-                    next += 1;
-                }
-                let e = &mut self.notes[id as usize];
-                let outcome = match presses.get(next) {
-                    Some(p) if p.pin_high.as_micros() < before => {
-                        next += 1;
-                        match p.sounded {
-                            Some(t) => {
-                                let err = t.as_nanos() as i64 / 1000 - e.score_at;
-                                let ms = err as f64 / 1000.0;
-                                if err > ON_TIME_US {
-                                    Outcome::Late { by_ms: ms }
-                                } else if err < -ON_TIME_US {
-                                    Outcome::Early { by_ms: -ms }
-                                } else {
-                                    Outcome::OnTime { error_ms: ms }
-                                }
-                            }
-                            None => Outcome::Unmatched,
-                        }
-                    }
-                    _ => Outcome::Unmatched,
-                };
-                e.state = State::Done(outcome);
-            }
+        let mut rest: Vec<&Press> = presses.iter().collect();
+        rest.sort_by_key(|p| (p.key, p.pin_high));
+        for p in rest {
+            self.press(p);
         }
         self.notes
-            .into_iter()
-            .enumerate()
-            .map(|(i, e)| NoteRecord {
-                id: i as u32,
-                channel: e.channel,
-                note: e.note,
-                score_at_us: e.score_at,
-                landing: e.landing,
-                outcome: match e.state {
-                    State::Done(o) => o,
-                    State::Unsent | State::Waiting => Outcome::Dropped(DropReason::Stopped),
-                    State::Struck { .. } => Outcome::Unmatched,
-                },
-            })
-            .collect()
     }
 }

@@ -181,7 +181,8 @@ fn robot_err(e: impl std::fmt::Display) -> PerformError {
 /// A finished performance: every note's record and what the virtual robot did.
 #[derive(Debug)]
 pub struct Played {
-    /// Every score note, in score order, with its outcome.
+    /// Every score note, in score order (its index is its [`NoteId`](crate::NoteId)), with its
+    /// outcome.
     pub records: Vec<NoteRecord>,
     /// What the virtual robot did: writes, edges, sounds, presses.
     pub performance: Performance,
@@ -254,7 +255,7 @@ impl Played {
                 Outcome::Dropped(_) => (0, 0),
                 Outcome::Unmatched => (1, 0),
                 Outcome::Joined => (2, 0),
-                Outcome::Late { by_ms } | Outcome::Early { by_ms } => (3, -(by_ms * 1000.0) as i64),
+                Outcome::Late { by_us } | Outcome::Early { by_us } => (3, -i64::from(by_us)),
                 _ => (9, 0),
             }
         };
@@ -468,6 +469,7 @@ where
     for d in robot.drain_decided() {
         ledger.decided(d.t_us, d.event);
     }
+    robot.drain_presses(|p| ledger.press(p));
     let longest_release = (0..setup.config.range.keys())
         .map(|k| {
             setup
@@ -527,6 +529,7 @@ fn deliver<M: MidiOut>(
     for d in robot.drain_decided() {
         ledger.decided(d.t_us, d.event);
     }
+    robot.drain_presses(|p| ledger.press(p));
     Ok(())
 }
 

@@ -41,11 +41,7 @@ impl Spread {
     pub fn of_onsets(records: &[NoteRecord]) -> Self {
         let mut e: Vec<f64> = records
             .iter()
-            .filter_map(|r| match r.outcome {
-                Outcome::OnTime { error_ms } => Some(error_ms.abs()),
-                Outcome::Late { by_ms } | Outcome::Early { by_ms } => Some(by_ms),
-                _ => None,
-            })
+            .filter_map(|r| r.outcome.error_ms())
             .collect();
         Self::of(&mut e)
     }

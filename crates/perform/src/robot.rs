@@ -221,6 +221,12 @@ impl<B: Boards> LocalRobot<B> {
 }
 
 impl LocalRobot<SimBoards> {
+    /// Hands the virtual robot's resolved presses to `f` (with `Keep::Presses`; see
+    /// `VirtualRobot::drain_presses`).
+    pub fn drain_presses(&mut self, f: impl FnMut(&orch_sim::Press)) {
+        self.boards.bus_mut().drain_presses(f);
+    }
+
     /// Ends a virtual robot's performance at `end_us` (after the keys are back up).
     pub fn finish(self, end_us: u64) -> (HostInterpreter, Performance) {
         let (interp, boards) = self.into_parts();

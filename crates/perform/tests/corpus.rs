@@ -137,7 +137,7 @@ fn dbg_one() {
     for r in &played.records {
         let bad = match r.outcome {
             orch_perform::Outcome::Unmatched => true,
-            orch_perform::Outcome::Late { by_ms } => by_ms > 30.0,
+            orch_perform::Outcome::Late { by_us } => by_us > 30_000,
             _ => false,
         };
         if bad && n < 10 {

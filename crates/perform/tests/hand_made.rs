@@ -181,8 +181,8 @@ fn a_drum_roll_faster_than_the_key_can_repeat_never_falls_behind() {
         .records
         .iter()
         .filter_map(|r| match r.outcome {
-            Outcome::Late { by_ms } => Some(by_ms),
-            Outcome::OnTime { error_ms } => Some(error_ms),
+            Outcome::Late { by_us } => Some(by_us as f64 / 1000.0),
+            Outcome::OnTime { error_us } => Some(error_us as f64 / 1000.0),
             _ => None,
         })
         .collect();

@@ -226,6 +226,12 @@ impl Mechanics {
         &self.presses
     }
 
+    /// Hands the presses decided so far to `f`, oldest first, and forgets them.
+    pub fn drain_presses(&mut self, f: impl FnMut(&Press)) {
+        self.presses.iter().for_each(f);
+        self.presses.clear();
+    }
+
     /// Takes the presses decided so far out of the mechanics.
     pub fn take_presses(&mut self) -> Vec<Press> {
         core::mem::take(&mut self.presses)

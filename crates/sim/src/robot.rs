@@ -182,6 +182,15 @@ impl VirtualRobot {
         &self.recorder
     }
 
+    /// With [`Keep::Presses`], hands the presses resolved since the last call to `f` and
+    /// forgets them (memory then follows the keys, not the notes); with [`Keep::Everything`]
+    /// they stay for [`finish`](Self::finish).
+    pub fn drain_presses(&mut self, f: impl FnMut(&crate::mechanics::Press)) {
+        if self.config.keep == Keep::Presses {
+            self.mechanics.drain_presses(f);
+        }
+    }
+
     /// Moves what happened on the bus since the last sync into the recorder and the mechanics.
     pub fn sync(&mut self) {
         let keep = self.config.keep == Keep::Everything;
