@@ -130,9 +130,12 @@ impl Setup {
             min_press: Duration::from_millis(h[3] as u32 % 30),
             watchdog: (flags & 0x20 == 0).then(|| Duration::from_secs(4)),
             late_limit: (flags & 0x08 == 0).then(|| Duration::from_millis(h[1] as u32 % 64)),
-            duty: (flags & 0x80 == 0).then(|| orch_core::DutyLimit {
-                window: Duration::from_millis(400),
-                max_on: Duration::from_millis(20 + h[1] as u32),
+            // (Only where orch-core was built with its duty limit: the default has one then.)
+            duty: (flags & 0x80 == 0 && GuardConfig::DEFAULT.duty.is_some()).then(|| {
+                orch_core::DutyLimit {
+                    window: Duration::from_millis(400),
+                    max_on: Duration::from_millis(20 + h[1] as u32),
+                }
             }),
         };
         let channels = if flags & 0x04 != 0 {

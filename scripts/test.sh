@@ -21,8 +21,9 @@ cargo fmt --all -- --check
 step "lint"
 cargo clippy --workspace --all-targets --all-features -- -D warnings
 
-step "no_std: orch-core and orch-boards for thumbv6m-none-eabi"
+step "no_std: orch-core and orch-boards for thumbv6m-none-eabi; orch-core without its default features (as the ATmega16 builds it)"
 cargo build -p orch-core -p orch-boards --target thumbv6m-none-eabi
+cargo clippy -p orch-core --no-default-features --all-targets -- -D warnings
 
 step "docs"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features

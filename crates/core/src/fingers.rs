@@ -133,9 +133,6 @@ impl<const K: usize> Fingers<K> {
         0
     }
 
-    #[cfg(not(feature = "duty-limit"))]
-    pub fn set_heat_ms(&mut self, _key: u8, _heat: u64) {}
-
     pub fn set_velocity(&mut self, key: u8, velocity: u8) {
         self.velocity[key as usize] = velocity;
     }

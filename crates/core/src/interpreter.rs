@@ -391,6 +391,9 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     /// How long after its press the duty limit cuts `key` (down), from its heat at the
     /// press; `None` without a duty limit.
     fn duty_cut_after(&self, key: u8) -> Option<u32> {
+        if !cfg!(feature = "duty-limit") {
+            return None;
+        }
         let d = self.config.guard.duty?;
         let (on, window) = (d.max_on.as_micros() as u64, d.window.as_micros() as u64);
         if on >= window {
@@ -659,6 +662,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     }
 
     fn press_now(&mut self, key: u8, now: Instant) {
+        #[cfg(feature = "duty-limit")]
         if let Some(d) = self.config.guard.duty {
             // The key cooled at the duty while it was up.
             let up = self.fingers.age(key, now) as u64;
@@ -709,6 +713,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     /// Releases `key` now if it is down.
     fn release_now(&mut self, key: u8, now: Instant) {
         if self.fingers.phase(key) == DOWN {
+            #[cfg(feature = "duty-limit")]
             if let Some(d) = self.config.guard.duty {
                 // It heated at (1 − duty) while it was down; rounded up, to be safe.
                 let (on, window) = (d.max_on.as_micros() as u64, d.window.as_micros() as u64);

@@ -208,6 +208,7 @@ fn every_note_on_gets_exactly_one_first_event_and_waits_end_once() {
 }
 
 #[test]
+#[cfg(feature = "duty-limit")]
 fn the_duty_limit_cuts_a_key_struck_again_just_before_the_hold_limit() {
     // Struck every 9.9 s, held 9.8 s: 99 % duty. The hold limit never fires.
     let mut r = Rig::new(quiet_ok());
@@ -226,6 +227,7 @@ fn the_duty_limit_cuts_a_key_struck_again_just_before_the_hold_limit() {
 }
 
 #[test]
+#[cfg(feature = "duty-limit")]
 fn the_duty_limit_leaves_music_alone() {
     // A repeated note at 48 % duty for ten minutes is never cut; at 60 % (more than the
     // 50 % allowed) its heat grows by 0.1 s a second and it is cut after about 300 s.

@@ -512,10 +512,12 @@ pub fn guard() -> impl Strategy<Value = GuardConfig> {
                 watchdog: watchdog.map(Duration::from_millis),
                 late_limit: late.map(Duration::from_millis),
                 // max_on = window × percent / 100.
-                duty: duty.map(|(window, percent)| orch_core::DutyLimit {
-                    window: Duration::from_millis(window),
-                    max_on: Duration::from_micros((window * 10 * percent).max(1)),
-                }),
+                duty: duty.filter(|_| GuardConfig::DEFAULT.duty.is_some()).map(
+                    |(window, percent)| orch_core::DutyLimit {
+                        window: Duration::from_millis(window),
+                        max_on: Duration::from_micros((window * 10 * percent).max(1)),
+                    },
+                ),
             },
         )
 }
