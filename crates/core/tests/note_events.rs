@@ -2,9 +2,10 @@
 //! exactly one more; `overlap` (hold | restrike), `late_limit` (too fast) and the duty limit.
 
 use orch_core::{
-    Config, DropReason, Duration, DutyLimit, GuardConfig, Instant, Interpreter, NoteEvent, Overlap,
-    Recording,
+    Config, DropReason, GuardConfig, Instant, Interpreter, NoteEvent, Overlap, Recording,
 };
+#[cfg(feature = "duty-limit")]
+use orch_core::{Duration, DutyLimit};
 
 fn ms(t: u64) -> Instant {
     Instant::from_millis(t)
@@ -260,6 +261,7 @@ fn the_duty_limit_leaves_music_alone() {
 }
 
 /// The thesis's robot with no watchdog: tests here feed nothing between far-apart notes.
+#[cfg(feature = "duty-limit")]
 fn quiet_ok() -> Config<4> {
     Config {
         guard: GuardConfig {
