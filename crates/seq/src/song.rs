@@ -14,14 +14,18 @@ pub const DEFAULT_TEMPO: u32 = 500_000;
 /// The wire bytes of one MIDI message: status and data, never running status.
 ///
 /// Channel messages (1 to 3 bytes) are kept inline; a System Exclusive message (`F0 … F7`)
-/// is kept on the heap.
+/// is kept on the heap. 16 bytes either way.
 #[derive(Clone, PartialEq, Eq, Hash)]
 pub struct WireBytes(Repr);
 
 #[derive(Clone, PartialEq, Eq, Hash)]
 enum Repr {
-    Inline { len: u8, buf: [u8; 3] },
-    Heap(Box<[u8]>),
+    Inline {
+        len: u8,
+        buf: [u8; 3],
+    },
+    /// Boxed twice so the pointer is thin and the whole value 16 bytes.
+    Heap(Box<Box<[u8]>>),
 }
 
 impl WireBytes {
@@ -35,7 +39,7 @@ impl WireBytes {
                 buf,
             })
         } else {
-            Self(Repr::Heap(message.into()))
+            Self(Repr::Heap(Box::new(message.into())))
         }
     }
 
@@ -256,15 +260,21 @@ impl Timebase {
 /// What one track contributed.
 #[derive(Default)]
 struct TrackData {
-    messages: Vec<(u64, WireBytes)>,
     tempos: Vec<(u64, u32)>,
     signatures: Vec<(u64, u8, u8)>,
     name: Option<String>,
     end_tick: u64,
 }
 
-fn read_track(index: u16, bytes: &smf::TrackBytes<'_>) -> Result<TrackData, SeqError> {
+/// Reads one track: its messages go straight into `events` (tick in `tick`, no time yet),
+/// everything else into the returned [`TrackData`].
+fn read_track(
+    index: u16,
+    bytes: &smf::TrackBytes<'_>,
+    events: &mut Vec<Event>,
+) -> Result<TrackData, SeqError> {
     let mut out = TrackData::default();
+    let mut messages = TrackMessages { index, events };
     let mut tick: u64 = 0;
     let mut sysex: Option<(u64, Vec<u8>)> = None;
     for framed in Frames::new(index, bytes) {
@@ -315,17 +325,17 @@ fn read_track(index: u16, bytes: &smf::TrackBytes<'_>) -> Result<TrackData, SeqE
                 } else {
                     3
                 };
-                out.messages.push((tick, WireBytes::new(&wire[..len])));
+                messages.push((tick, WireBytes::new(&wire[..len])));
             }
             TrackEventKind::SysEx(data) => {
                 if let Some((t, open)) = sysex.take() {
-                    out.messages.push((t, close_sysex(open)));
+                    messages.push((t, close_sysex(open)));
                 }
                 let mut msg = Vec::with_capacity(data.len() + 1);
                 msg.push(0xF0);
                 msg.extend_from_slice(data);
                 if data.last() == Some(&0xF7) {
-                    out.messages.push((tick, WireBytes::new(&msg)));
+                    messages.push((tick, WireBytes::new(&msg)));
                 } else {
                     sysex = Some((tick, msg));
                 }
@@ -334,7 +344,7 @@ fn read_track(index: u16, bytes: &smf::TrackBytes<'_>) -> Result<TrackData, SeqE
                 if let Some((t, mut open)) = sysex.take() {
                     open.extend_from_slice(data);
                     if data.last() == Some(&0xF7) {
-                        out.messages.push((t, WireBytes::new(&open)));
+                        messages.push((t, WireBytes::new(&open)));
                     } else {
                         sysex = Some((t, open));
                     }
@@ -351,9 +361,26 @@ fn read_track(index: u16, bytes: &smf::TrackBytes<'_>) -> Result<TrackData, SeqE
         }
     }
     if let Some((t, open)) = sysex.take() {
-        out.messages.push((t, close_sysex(open)));
+        messages.push((t, close_sysex(open)));
     }
     Ok(out)
+}
+
+/// Where a track's messages go.
+struct TrackMessages<'a> {
+    index: u16,
+    events: &'a mut Vec<Event>,
+}
+
+impl TrackMessages<'_> {
+    fn push(&mut self, (tick, bytes): (u64, WireBytes)) {
+        self.events.push(Event {
+            time_us: 0,
+            tick,
+            track: self.index,
+            bytes,
+        });
+    }
 }
 
 fn close_sysex(mut open: Vec<u8>) -> WireBytes {
@@ -375,12 +402,16 @@ impl Song {
         let chunks = smf::split(bytes)?;
         let format = chunks.header.format;
         let timing = chunks.header.timing;
-        let tracks = chunks
-            .tracks
-            .iter()
-            .enumerate()
-            .map(|(i, t)| read_track(i as u16, t))
-            .collect::<Result<Vec<_>, _>>()?;
+        // Every track's messages straight into one list (no copy per track); `starts[i]` is
+        // where track i's begin.
+        let mut events: Vec<Event> = Vec::new();
+        let mut starts = Vec::with_capacity(chunks.tracks.len() + 1);
+        let mut tracks = Vec::with_capacity(chunks.tracks.len());
+        for (i, t) in chunks.tracks.iter().enumerate() {
+            starts.push(events.len());
+            tracks.push(read_track(i as u16, t, &mut events)?);
+        }
+        starts.push(events.len());
 
         // Tick offsets: format 2 plays its tracks one after another.
         let sequential = format == Format::Sequential;
@@ -467,17 +498,19 @@ impl Song {
             .unwrap_or(0);
 
         let track_names = tracks.iter().map(|t| t.name.clone()).collect();
-        let mut events: Vec<Event> = Vec::new();
-        for (i, t) in tracks.into_iter().enumerate() {
-            events.extend(t.messages.into_iter().map(|(tick, bytes)| Event {
-                time_us: 0,
-                tick: tick + offsets[i],
-                track: i as u16,
-                bytes,
-            }));
+        if sequential {
+            for (i, w) in starts.windows(2).enumerate() {
+                for e in &mut events[w[0]..w[1]] {
+                    e.tick += offsets[i];
+                }
+            }
         }
-        // Stable: track order, then order in the track.
-        events.sort_by_key(|e| e.tick);
+        // Stable: track order, then order in the track (one track, or format 2, is in order
+        // already and needs no sort and no scratch memory).
+        if !events.is_sorted_by_key(|e| e.tick) {
+            events.sort_by_key(|e| e.tick);
+        }
+        events.shrink_to_fit();
         release_before_restrike(&mut events);
         for e in &mut events {
             e.time_us = timebase.time_us(e.tick);
