@@ -200,3 +200,24 @@ fn a_guard_that_is_off_plays_the_bare_mapping_and_still_adds_up() {
     let p = play(&setup(c), &[(100, &[0x90, 60, 100]), (200, &[0x80, 60, 0])]);
     assert_eq!(names(&p), ["on_time"]);
 }
+
+#[test]
+fn a_key_struck_again_every_9_9_s_is_cut_by_the_duty_limit_and_the_report_says_so() {
+    // Held 9.8 s, struck again 0.1 s later, for two minutes: never past the 10 s hold limit,
+    // but powered 99 % of the time.
+    let mut ev: Vec<(u64, Vec<u8>)> = Vec::new();
+    for i in 0..12u64 {
+        ev.push((100 + i * 9_900, vec![0x90, 60, 100]));
+        ev.push((100 + i * 9_900 + 9_800, vec![0x80, 60, 0]));
+    }
+    let ev: Vec<(u64, &[u8])> = ev.iter().map(|(t, b)| (*t, b.as_slice())).collect();
+    let r = play(&setup(thesis_config()), &ev).report(None);
+    assert_eq!(r.cut_by_hold_limit, 0);
+    assert!(r.cut_by_duty_limit >= 1, "{r:?}");
+    assert!(r.adds_up());
+    // Without the duty limit nothing cuts it.
+    let mut c = thesis_config();
+    c.guard.duty = None;
+    let r = play(&setup(c), &ev).report(None);
+    assert_eq!(r.cut_by_duty_limit, 0);
+}
