@@ -18,6 +18,9 @@ use crate::tempo::Tempo;
 /// 200 ms without a byte, so the robot's watchdog fires only when the sender is really gone.
 pub const KEEP_ALIVE_US: u64 = 200_000;
 
+/// How often a live performance tells where it stands (25 times a second).
+const SHOW_EVERY_US: u64 = 40_000;
+
 /// How a performance is set up.
 #[derive(Clone, Debug)]
 pub struct Setup {
@@ -356,32 +359,38 @@ where
             _ => (next, false),
         };
         if let Some(l) = live.as_deref_mut() {
-            // Wake at least every 40 ms to show where the song is and to look at `control`.
+            // Wake at least every 40 ms to show where the song is and to look at `control`;
+            // the last stretch before a send is one precise wait, with nothing else in it.
             let mut stop = false;
+            let mut replan = false;
             loop {
-                let now = clock.now_us();
                 if control.is_some_and(Control::stopping) {
                     stop = true;
                     break;
                 }
-                if now >= due.0 {
+                if control.is_some_and(Control::tempo_pending) {
+                    replan = true;
                     break;
                 }
-                let step = due.0.min(now + 40_000);
-                clock.wait_until(step);
+                let now = clock.now_us();
+                if now + SHOW_EVERY_US >= due.0 {
+                    clock.wait_until(due.0);
+                    break;
+                }
+                clock.wait_until(now + SHOW_EVERY_US);
                 l(&Live {
-                    song_us: planner.time_map().score(step as i64),
+                    song_us: planner.time_map().score(clock.now_us() as i64),
                     keys_down: robot.keys_down(),
                     notes_sent,
                     tempo: planner.time_map().tempo().get(),
                 });
-                if control.is_some_and(|c| c.tempo_pending()) {
-                    break;
-                }
             }
             if stop {
                 stopped_at = Some(clock.now_us().max(last_at));
                 break;
+            }
+            if replan {
+                continue;
             }
         } else {
             clock.wait_until(due.0);
