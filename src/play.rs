@@ -26,7 +26,7 @@ pub fn load_song(path: &Path) -> anyhow::Result<Song> {
 
 pub fn load_robot(path: Option<&Path>) -> anyhow::Result<Robot> {
     match path {
-        Some(p) => Robot::load(p),
+        Some(p) => Ok(Robot::load(p)?),
         None => Ok(Robot::thesis()),
     }
 }
