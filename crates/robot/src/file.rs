@@ -41,6 +41,49 @@ struct File {
     guard: Guard,
 }
 
+// Integers are read as TOML's own i64 and checked here, so that a value out of range is
+// refused naming the field and the range, not with serde's "expected u8".
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct Keys {
+    low: i64,
+    high: i64,
+    out_of_range: Policy,
+    // "all" or a list of 1..=16: read as any TOML value and checked here, so that a wrong
+    // one gets a message saying what to write.
+    channels: toml::Value,
+    sustain: bool,
+}
+
+impl Default for Keys {
+    fn default() -> Self {
+        Self {
+            low: 36,
+            high: 96,
+            out_of_range: Policy::Fold,
+            channels: toml::Value::String("all".into()),
+            sustain: false,
+        }
+    }
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum Policy {
+    Fold,
+    Drop,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Board {
+    address: i64,
+    keys: i64,
+    #[serde(default)]
+    first_bit: i64,
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, default)]
 struct Bus {
@@ -78,90 +121,10 @@ impl Default for Mechanics {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct KeyFigures {
-    note: u8,
+    note: i64,
     press_delay: Option<String>,
     release_delay: Option<String>,
     min_hold: Option<String>,
-}
-
-/// Parses a bus clock: "83.33kHz", "100kHz", "400kHz" (or any "N kHz" / "N Hz" up to 1 MHz).
-fn clock(text: &str) -> Result<BusClock, RobotError> {
-    let t = text.trim().to_ascii_lowercase().replace(' ', "");
-    let hz = if t == "83.33khz" || t == "83.333khz" {
-        return Ok(BusClock::THESIS);
-    } else if let Some(k) = t.strip_suffix("khz") {
-        k.parse::<f64>().ok().map(|k| k * 1e3)
-    } else if let Some(h) = t.strip_suffix("hz") {
-        h.parse::<f64>().ok()
-    } else {
-        None
-    };
-    match hz {
-        Some(hz) if (1_000.0..=1_000_000.0).contains(&hz) => {
-            Ok(BusClock::from_hz(hz.round() as u32))
-        }
-        _ => Err(RobotError::field(
-            "bus.clock",
-            format!("{text:?}: write \"83.33kHz\", \"100kHz\" or \"400kHz\" (1 kHz to 1 MHz)"),
-        )),
-    }
-}
-
-/// A duration that must be given (not "off").
-fn delay(field: &str, text: &str) -> Result<Duration, RobotError> {
-    duration(field, text)?
-        .ok_or_else(|| RobotError::field(field, "\"off\": give a duration such as \"15ms\""))
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields, default)]
-struct Keys {
-    low: u8,
-    high: u8,
-    out_of_range: Policy,
-    channels: Channels,
-    sustain: bool,
-}
-
-impl Default for Keys {
-    fn default() -> Self {
-        Self {
-            low: 36,
-            high: 96,
-            out_of_range: Policy::Fold,
-            channels: Channels::All(AllWord::All),
-            sustain: false,
-        }
-    }
-}
-
-#[derive(Deserialize, Clone, Copy)]
-#[serde(rename_all = "lowercase")]
-enum Policy {
-    Fold,
-    Drop,
-}
-
-#[derive(Deserialize)]
-#[serde(untagged)]
-enum Channels {
-    All(AllWord),
-    List(Vec<u8>),
-}
-
-#[derive(Deserialize)]
-#[serde(rename_all = "lowercase")]
-enum AllWord {
-    All,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Board {
-    address: u8,
-    keys: u8,
-    #[serde(default)]
-    first_bit: u8,
 }
 
 #[derive(Deserialize)]
@@ -169,7 +132,7 @@ struct Board {
 struct Guard {
     enabled: bool,
     max_hold: String,
-    max_keys_down: u8,
+    max_keys_down: i64,
     restrike_gap: String,
     min_press: String,
     watchdog: String,
@@ -186,6 +149,103 @@ impl Default for Guard {
             watchdog: "4s".into(),
         }
     }
+}
+
+/// An integer field that must lie in `lo..=hi`; `what` says what the number is.
+fn int(field: &str, value: i64, lo: u8, hi: u8, what: &str) -> Result<u8, RobotError> {
+    if (i64::from(lo)..=i64::from(hi)).contains(&value) {
+        Ok(value as u8)
+    } else {
+        Err(RobotError::field(
+            field,
+            format!("{value} is out of range: {what} is {lo}..={hi}"),
+        ))
+    }
+}
+
+/// What `keys.channels` accepts.
+const CHANNELS_HELP: &str =
+    "write \"all\" or a list of channels as people count them, 1..=16, such as [1, 2, 10]";
+
+/// Reads `keys.channels`: `"all"` or a non-empty list of channels 1..=16.
+fn channels(value: &toml::Value) -> Result<ChannelMask, RobotError> {
+    const FIELD: &str = "keys.channels";
+    match value {
+        toml::Value::String(s) if s == "all" => Ok(ChannelMask::ALL),
+        toml::Value::Array(list) if list.is_empty() => Err(RobotError::field(
+            FIELD,
+            format!("[] listens to no channel at all; {CHANNELS_HELP}"),
+        )),
+        toml::Value::Array(list) => {
+            let mut mask = ChannelMask::NONE;
+            for (i, item) in list.iter().enumerate() {
+                let ch = item
+                    .as_integer()
+                    .filter(|c| (1..=16).contains(c))
+                    .and_then(|c| Channel::new(c as u8 - 1))
+                    .ok_or_else(|| {
+                        RobotError::field(
+                            format!("{FIELD}[{i}]"),
+                            format!("{item} is not a channel; {CHANNELS_HELP}"),
+                        )
+                    })?;
+                mask = mask.with(ch);
+            }
+            Ok(mask)
+        }
+        other => Err(RobotError::field(
+            FIELD,
+            format!("{other} is not a channel list; {CHANNELS_HELP}"),
+        )),
+    }
+}
+
+/// What `bus.clock` accepts.
+const CLOCK_HELP: &str = "write \"83.33kHz\" (the thesis's board), \"100kHz\", \"400kHz\" or \
+     \"1MHz\", or any clock from 1 kHz to 1 MHz in Hz, kHz or MHz (\"100000Hz\", \"0.4MHz\")";
+
+/// Parses a bus clock: "83.33kHz", "100kHz", "400kHz", "1MHz", or any "N Hz" / "N kHz" /
+/// "N MHz" from 1 kHz to 1 MHz.
+fn clock(text: &str) -> Result<BusClock, RobotError> {
+    let t = text.trim().to_ascii_lowercase().replace(' ', "");
+    let hz = if t == "83.33khz" || t == "83.333khz" {
+        return Ok(BusClock::THESIS);
+    } else if let Some(m) = t.strip_suffix("mhz") {
+        m.parse::<f64>().ok().map(|m| m * 1e6)
+    } else if let Some(k) = t.strip_suffix("khz") {
+        k.parse::<f64>().ok().map(|k| k * 1e3)
+    } else if let Some(h) = t.strip_suffix("hz") {
+        h.parse::<f64>().ok()
+    } else {
+        None
+    };
+    match hz {
+        Some(hz) if (1_000.0..=1_000_000.0).contains(&hz) => {
+            Ok(BusClock::from_hz(hz.round() as u32))
+        }
+        _ => Err(RobotError::field(
+            "bus.clock",
+            format!("{text:?}: {CLOCK_HELP}"),
+        )),
+    }
+}
+
+/// A duration that must be given (not "off").
+fn delay(field: &str, text: &str) -> Result<Duration, RobotError> {
+    duration(field, text)?
+        .ok_or_else(|| RobotError::field(field, "\"off\": give a duration such as \"15ms\""))
+}
+
+/// A limit that is either "off" or longer than zero: zero would act at once, every time.
+fn limit(field: &str, text: &str, zero_means: &str) -> Result<Option<Duration>, RobotError> {
+    let d = duration(field, text)?;
+    if d == Some(Duration::ZERO) {
+        return Err(RobotError::field(
+            field,
+            format!("{text:?} {zero_means}; give a longer time, or \"off\" for no limit"),
+        ));
+    }
+    Ok(d)
 }
 
 /// Parses "10s", "60ms", "2min", "1500us" or "off".
@@ -225,90 +285,145 @@ fn duration(field: &str, text: &str) -> Result<Option<Duration>, RobotError> {
     Ok(Some(Duration::from_micros(micros.round() as u32)))
 }
 
+/// Reads `[guard]`.
+fn guard(g: &Guard) -> Result<GuardConfig, RobotError> {
+    if g.max_keys_down == 0 {
+        return Err(RobotError::field(
+            "guard.max_keys_down",
+            "0: no key could ever play; the most keys down at once is 1..=255",
+        ));
+    }
+    let max_keys_down = int(
+        "guard.max_keys_down",
+        g.max_keys_down,
+        1,
+        u8::MAX,
+        "the most keys down at once",
+    )?;
+    let max_hold = limit(
+        "guard.max_hold",
+        &g.max_hold,
+        "would release every key the moment it goes down, so no note could sound",
+    )?;
+    let watchdog = limit(
+        "guard.watchdog",
+        &g.watchdog,
+        "would release every key at once, before the next byte could arrive",
+    )?;
+    let restrike_gap = duration("guard.restrike_gap", &g.restrike_gap)?.unwrap_or(Duration::ZERO);
+    let min_press = duration("guard.min_press", &g.min_press)?.unwrap_or(Duration::ZERO);
+    if let Some(hold) = max_hold {
+        if min_press > hold {
+            return Err(RobotError::field(
+                "guard.min_press",
+                format!(
+                    "{:?} is longer than guard.max_hold = {:?}: a key held for its shortest \
+                     strike would be cut by the hold limit; make min_press shorter or max_hold \
+                     longer",
+                    g.min_press, g.max_hold
+                ),
+            ));
+        }
+    }
+    Ok(GuardConfig {
+        enabled: g.enabled,
+        max_hold,
+        max_keys_down,
+        restrike_gap,
+        min_press,
+        watchdog,
+    })
+}
+
+/// Reads `[[boards]]`, or the thesis's four boards if there are none.
+fn boards(list: Option<&[Board]>) -> Result<(Layout<MAX_BOARDS>, usize), RobotError> {
+    const THESIS: [Board; 4] = [
+        Board {
+            address: 0x21,
+            keys: 16,
+            first_bit: 0,
+        },
+        Board {
+            address: 0x22,
+            keys: 16,
+            first_bit: 0,
+        },
+        Board {
+            address: 0x23,
+            keys: 16,
+            first_bit: 0,
+        },
+        Board {
+            address: 0x24,
+            keys: 13,
+            first_bit: 0,
+        },
+    ];
+    let boards = list.unwrap_or(&THESIS);
+    if boards.is_empty() || boards.len() > MAX_BOARDS {
+        return Err(RobotError::field(
+            "boards",
+            format!("{} boards; orch drives 1 to {MAX_BOARDS}", boards.len()),
+        ));
+    }
+    let mut spans = [BoardSpan {
+        address: 0,
+        keys: 0,
+        first_bit: 0,
+    }; MAX_BOARDS];
+    for (i, b) in boards.iter().enumerate() {
+        let field = |name: &str| format!("boards[{i}].{name}");
+        if !(0x08..=0x77).contains(&b.address) {
+            return Err(RobotError::field(
+                field("address"),
+                format!(
+                    "{:#04x} is not a 7-bit I2C device address (0x08..=0x77)",
+                    b.address
+                ),
+            ));
+        }
+        if let Some(j) = boards[..i].iter().position(|o| o.address == b.address) {
+            return Err(RobotError::field(
+                field("address"),
+                format!("{:#04x} is used twice (also boards[{j}])", b.address),
+            ));
+        }
+        let keys = int(
+            &field("keys"),
+            b.keys,
+            1,
+            16,
+            "the number of keys on one board",
+        )?;
+        let first_bit = int(&field("first_bit"), b.first_bit, 0, 15, "an output bit")?;
+        if first_bit + keys > 16 {
+            return Err(RobotError::field(
+                format!("boards[{i}]"),
+                format!("first_bit {first_bit} + keys {keys} runs past output bit 15"),
+            ));
+        }
+        spans[i] = BoardSpan {
+            address: b.address as u8,
+            keys,
+            first_bit,
+        };
+    }
+    Ok((Layout { boards: spans }, boards.len()))
+}
+
 impl File {
     fn into_robot(self) -> Result<Robot, RobotError> {
         let k = &self.keys;
-        let low = Note::new(k.low).ok_or_else(|| {
-            RobotError::field("keys.low", format!("{}: a MIDI note is 0..=127", k.low))
-        })?;
-        let high = Note::new(k.high).ok_or_else(|| {
-            RobotError::field("keys.high", format!("{}: a MIDI note is 0..=127", k.high))
-        })?;
+        let low = Note::new(int("keys.low", k.low, 0, 127, "a MIDI note")?).expect("0..=127");
+        let high = Note::new(int("keys.high", k.high, 0, 127, "a MIDI note")?).expect("0..=127");
         let range = KeyRange::new(low, high).ok_or_else(|| {
             RobotError::field(
                 "keys.low",
                 format!("{} is above keys.high = {}", k.low, k.high),
             )
         })?;
-        let channels = match &k.channels {
-            Channels::All(_) => ChannelMask::ALL,
-            Channels::List(list) => {
-                let mut mask = ChannelMask::NONE;
-                for &c in list {
-                    let ch = c.checked_sub(1).and_then(Channel::new).ok_or_else(|| {
-                        RobotError::field(
-                            "keys.channels",
-                            format!("{c} is not a channel; channels are 1..=16"),
-                        )
-                    })?;
-                    mask = mask.with(ch);
-                }
-                mask
-            }
-        };
-        let boards = self.boards.unwrap_or_else(|| {
-            [(0x21, 16), (0x22, 16), (0x23, 16), (0x24, 13)]
-                .into_iter()
-                .map(|(address, keys)| Board {
-                    address,
-                    keys,
-                    first_bit: 0,
-                })
-                .collect()
-        });
-        if boards.is_empty() || boards.len() > MAX_BOARDS {
-            return Err(RobotError::field(
-                "boards",
-                format!("{} boards; orch drives 1 to {MAX_BOARDS}", boards.len()),
-            ));
-        }
-        let mut spans = [BoardSpan {
-            address: 0,
-            keys: 0,
-            first_bit: 0,
-        }; MAX_BOARDS];
-        for (i, b) in boards.iter().enumerate() {
-            if !(0x08..=0x77).contains(&b.address) {
-                return Err(RobotError::field(
-                    format!("boards[{i}].address"),
-                    format!(
-                        "{:#04x} is not a 7-bit I2C device address (0x08..=0x77)",
-                        b.address
-                    ),
-                ));
-            }
-            if boards[..i].iter().any(|o| o.address == b.address) {
-                return Err(RobotError::field(
-                    format!("boards[{i}].address"),
-                    format!("{:#04x} is used twice", b.address),
-                ));
-            }
-            if b.first_bit as usize + b.keys as usize > 16 {
-                return Err(RobotError::field(
-                    format!("boards[{i}]"),
-                    format!(
-                        "first_bit {} + keys {} runs past output bit 15",
-                        b.first_bit, b.keys
-                    ),
-                ));
-            }
-            spans[i] = BoardSpan {
-                address: b.address,
-                keys: b.keys,
-                first_bit: b.first_bit,
-            };
-        }
-        let layout = Layout { boards: spans };
+        let channels = channels(&k.channels)?;
+        let (layout, boards) = boards(self.boards.as_deref())?;
         if layout.keys() != range.keys() {
             return Err(RobotError::field(
                 "boards",
@@ -319,22 +434,6 @@ impl File {
                 ),
             ));
         }
-        let g = &self.guard;
-        if g.max_keys_down == 0 {
-            return Err(RobotError::field(
-                "guard.max_keys_down",
-                "0: no key could ever play",
-            ));
-        }
-        let guard = GuardConfig {
-            enabled: g.enabled,
-            max_hold: duration("guard.max_hold", &g.max_hold)?,
-            max_keys_down: g.max_keys_down,
-            restrike_gap: duration("guard.restrike_gap", &g.restrike_gap)?
-                .unwrap_or(Duration::ZERO),
-            min_press: duration("guard.min_press", &g.min_press)?.unwrap_or(Duration::ZERO),
-            watchdog: duration("guard.watchdog", &g.watchdog)?,
-        };
         let config = Config {
             channels,
             range,
@@ -344,46 +443,60 @@ impl File {
             },
             layout,
             sustain: k.sustain,
-            guard,
+            guard: guard(&self.guard)?,
         };
         config.validate(MAX_KEYS).map_err(config_error)?;
-        let m = &self.mechanics;
-        let default = KeyMechanics {
-            press_delay: delay("mechanics.press_delay", &m.press_delay)?,
-            release_delay: delay("mechanics.release_delay", &m.release_delay)?,
-            min_hold: delay("mechanics.min_hold", &m.min_hold)?,
-        };
-        let mut mechanics = MechanicsConfig::uniform(default);
-        for (i, k) in m.key.iter().enumerate() {
-            let field = |name: &str| format!("mechanics.key[{i}].{name}");
-            if !(low.get()..=high.get()).contains(&k.note) {
-                return Err(RobotError::field(
-                    field("note"),
-                    format!(
-                        "{}: the robot has keys for notes {}..={} only",
-                        k.note, low, high
-                    ),
-                ));
-            }
-            let mut figures = default;
-            if let Some(t) = &k.press_delay {
-                figures.press_delay = delay(&field("press_delay"), t)?;
-            }
-            if let Some(t) = &k.release_delay {
-                figures.release_delay = delay(&field("release_delay"), t)?;
-            }
-            if let Some(t) = &k.min_hold {
-                figures.min_hold = delay(&field("min_hold"), t)?;
-            }
-            mechanics = mechanics.with_key(k.note - low.get(), figures);
-        }
         Ok(Robot {
             config,
-            boards: boards.len(),
+            boards,
             clock: clock(&self.bus.clock)?,
-            mechanics,
+            mechanics: mechanics(&self.mechanics, range)?,
         })
     }
+}
+
+/// Reads `[mechanics]` and its `[[mechanics.key]]` entries, one at most per note.
+fn mechanics(m: &Mechanics, range: KeyRange) -> Result<MechanicsConfig, RobotError> {
+    let default = KeyMechanics {
+        press_delay: delay("mechanics.press_delay", &m.press_delay)?,
+        release_delay: delay("mechanics.release_delay", &m.release_delay)?,
+        min_hold: delay("mechanics.min_hold", &m.min_hold)?,
+    };
+    let (low, high) = (range.low().get(), range.high().get());
+    let mut mechanics = MechanicsConfig::uniform(default);
+    for (i, k) in m.key.iter().enumerate() {
+        let field = |name: &str| format!("mechanics.key[{i}].{name}");
+        if !(i64::from(low)..=i64::from(high)).contains(&k.note) {
+            return Err(RobotError::field(
+                field("note"),
+                format!(
+                    "{} is out of range: the robot has keys for notes {low}..={high} only",
+                    k.note
+                ),
+            ));
+        }
+        if let Some(j) = m.key[..i].iter().position(|o| o.note == k.note) {
+            return Err(RobotError::field(
+                field("note"),
+                format!(
+                    "note {} is already given in mechanics.key[{j}]; list each key once",
+                    k.note
+                ),
+            ));
+        }
+        let mut figures = default;
+        if let Some(t) = &k.press_delay {
+            figures.press_delay = delay(&field("press_delay"), t)?;
+        }
+        if let Some(t) = &k.release_delay {
+            figures.release_delay = delay(&field("release_delay"), t)?;
+        }
+        if let Some(t) = &k.min_hold {
+            figures.min_hold = delay(&field("min_hold"), t)?;
+        }
+        mechanics = mechanics.with_key(k.note as u8 - low, figures);
+    }
+    Ok(mechanics)
 }
 
 #[cfg(test)]

@@ -112,7 +112,7 @@ channels = "all"
 sustain = false
 
 # The finger boards (PCA9555 or TCA9555), in key order: each drives `keys` consecutive keys
-# from output bit `first_bit` (bits 0-7 are port 0, 8-15 port 1).
+# (1 to 16) from output bit `first_bit` (bits 0-7 are port 0, 8-15 port 1).
 [[boards]]
 address = 0x21
 keys = 16
@@ -133,14 +133,16 @@ address = 0x24
 keys = 13
 first_bit = 0
 
-# The I2C bus to the boards: "83.33kHz" (the thesis's board), "100kHz" or "400kHz".
+# The I2C bus to the boards: "83.33kHz" (the thesis's board), "100kHz", "400kHz" or "1MHz"
+# (any clock from 1 kHz to 1 MHz, written in Hz, kHz or MHz).
 # The PCA9555 and TCA9555 are rated for 400 kHz: a board write then takes 95 us, not 456 us.
 [bus]
 clock = "400kHz"
 
 # How the keys move, for the virtual robot and for latency compensation. press_delay: from
 # the solenoid's power to the key sounding; release_delay: from power off until the key is
-# fully up; min_hold: the shortest pulse that sounds. Keys that differ are listed by note.
+# fully up; min_hold: the shortest pulse that sounds. Keys that differ are listed by note,
+# each note once.
 [mechanics]
 press_delay = "15ms"
 release_delay = "25ms"
@@ -150,11 +152,12 @@ min_hold = "8ms"
 # press_delay = "20ms"
 
 # The safety guard. Durations are written like "10s", "60ms" or "2min"; "off" means no limit.
+# max_hold and watchdog are "off" or longer than 0; min_press is at most max_hold.
 [guard]
 enabled = true
-max_hold = "10s"          # the longest a key may stay down
+max_hold = "10s"          # the longest a key may stay down (more than 0)
 max_keys_down = 16        # the power budget: a new note past it is refused
 restrike_gap = "60ms"     # the shortest rest before a key strikes again
 min_press = "20ms"        # how long a delayed re-strike is held if its note ended while it waited
-watchdog = "4s"           # release every key after this long without a byte
+watchdog = "4s"           # release every key after this long without a byte (more than 0)
 "#;
