@@ -249,6 +249,78 @@ fn interpret_guard_delays_a_repeated_note_and_guard_off_does_not() {
 }
 
 #[test]
+fn interpret_guard_on_wins_over_a_robot_file_that_disables_it_and_says_so() {
+    let dir = std::env::temp_dir().join(format!("orch-guard-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let off = dir.join("guard-off.toml");
+    std::fs::write(&off, "[guard]\nenabled = false\n").unwrap();
+    let off = off.to_str().unwrap();
+    // On, off, on again at once: only the guard delays the re-strike.
+    let hex = "90 3C 7F 80 3C 00 90 3C 7F";
+    let restruck_by_byte_8 = |out: &[u8]| {
+        json_lines(out)
+            .iter()
+            .any(|l| l["byte"] == 8 && l["outputs"] == 256)
+    };
+    // The file alone: no guard, the note re-strikes at byte 8, and nothing is said.
+    let (code, out, err) = run(&["interpret", "--hex", "--json", "--robot", off], hex);
+    assert_eq!(code, 0);
+    assert!(restruck_by_byte_8(&out));
+    assert!(err.is_empty(), "{err}");
+    // --guard on wins: the re-strike waits, and stderr says so loudly.
+    let (code, out, err) = run(
+        &[
+            "interpret",
+            "--hex",
+            "--json",
+            "--robot",
+            off,
+            "--guard",
+            "on",
+        ],
+        hex,
+    );
+    assert_eq!(code, 0);
+    assert!(!restruck_by_byte_8(&out), "the guard must be on");
+    assert!(
+        err.contains("WARNING") && err.contains("--guard on") && err.contains("guard-off.toml"),
+        "{err}"
+    );
+    assert!(err.contains("safety guard is ON"), "{err}");
+    // --guard off over a file that has it on says so too; agreeing flags say nothing.
+    let on = dir.join("guard-on.toml");
+    std::fs::write(&on, "[guard]\nenabled = true\n").unwrap();
+    let on = on.to_str().unwrap();
+    let (_, out, err) = run(
+        &[
+            "interpret",
+            "--hex",
+            "--json",
+            "--robot",
+            on,
+            "--guard",
+            "off",
+        ],
+        hex,
+    );
+    assert!(restruck_by_byte_8(&out));
+    assert!(err.contains("safety guard is OFF"), "{err}");
+    let (_, _, err) = run(
+        &[
+            "interpret",
+            "--hex",
+            "--json",
+            "--robot",
+            on,
+            "--guard",
+            "on",
+        ],
+        hex,
+    );
+    assert!(err.is_empty(), "{err}");
+}
+
+#[test]
 fn interpret_text_shows_fingers_and_stats() {
     let (code, out, _) = run(&["interpret", "--hex"], "90 3C 7F");
     assert_eq!(code, 0);
