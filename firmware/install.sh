@@ -13,10 +13,13 @@
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 
+# Installed means "install ok installed": `dpkg -s` also succeeds for a package removed but not
+# purged (its configuration files left), which is not there.
+installed() { [ "$(dpkg-query -W -f='${Status}' "$1" 2>/dev/null)" = "install ok installed" ]; }
 need=()
 for pkg in gcc-avr binutils-avr avr-libc simavr libclang-dev libelf-dev libzstd-dev pkg-config \
     build-essential "$@"; do
-    dpkg -s "$pkg" >/dev/null 2>&1 || need+=("$pkg")
+    installed "$pkg" || need+=("$pkg")
 done
 if ((${#need[@]})); then
     echo "== installing ${need[*]}"
