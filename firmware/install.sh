@@ -25,10 +25,27 @@ if ((${#need[@]})); then
     echo "== installing ${need[*]}"
     sudo_=""
     [ "$(id -u)" = 0 ] || sudo_="sudo"
-    # Wait for another apt or dpkg run to finish rather than fail on its lock.
+    # Wait for another apt or dpkg run to finish rather than fail on its lock, and try again if
+    # one ran in between (another checkout's test command installing the same packages); show
+    # apt's output only if it fails for good.
     lock=(-o DPkg::Lock::Timeout=600)
-    $sudo_ apt-get "${lock[@]}" update -qq
-    DEBIAN_FRONTEND=noninteractive $sudo_ apt-get "${lock[@]}" install -y -qq "${need[@]}" >/dev/null
+    log="$(mktemp)"
+    for attempt in 1 2 3; do
+        if $sudo_ apt-get "${lock[@]}" update -qq >"$log" 2>&1 &&
+            DEBIAN_FRONTEND=noninteractive $sudo_ apt-get "${lock[@]}" install -y -qq "${need[@]}" \
+                >>"$log" 2>&1; then
+            break
+        fi
+        if ((attempt == 3)); then
+            cat "$log" >&2
+            rm -f "$log"
+            echo "firmware/install.sh: apt-get could not install ${need[*]}" >&2
+            exit 1
+        fi
+        echo "== apt-get failed (attempt $attempt); trying again in 10 s"
+        sleep 10
+    done
+    rm -f "$log"
 fi
 
 # The toolchain pinned in firmware/atmega16/rust-toolchain.toml, with rust-src and rustfmt.
