@@ -13,28 +13,9 @@ set -euo pipefail
 unset CARGO_TARGET_DIR
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 
-need=()
-for pkg in gcc-avr binutils-avr avr-libc simavr libclang-dev libelf-dev libzstd-dev pkg-config; do
-    dpkg -s "$pkg" >/dev/null 2>&1 || need+=("$pkg")
-done
-if ((${#need[@]})); then
-    echo "== installing ${need[*]}"
-    sudo_=""
-    [ "$(id -u)" = 0 ] || sudo_="sudo"
-    $sudo_ apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive $sudo_ apt-get install -y -qq "${need[@]}" >/dev/null
-fi
-
-# The toolchain pinned in firmware/atmega16/rust-toolchain.toml, with rust-src for build-std.
+# Debian packages and the pinned nightly with rust-src and rustfmt: firmware/install.sh.
+bash "$here/install.sh"
 channel="$(sed -n 's/^channel *= *"\(.*\)"/\1/p' "$here/atmega16/rust-toolchain.toml")"
-if ! rustup run "$channel" rustc --version >/dev/null 2>&1; then
-    echo "== installing toolchain $channel"
-    rustup toolchain install "$channel" --profile minimal
-fi
-if ! rustup component list --toolchain "$channel" --installed | grep -q '^rust-src'; then
-    echo "== adding rust-src to $channel"
-    rustup component add rust-src --toolchain "$channel"
-fi
 
 echo "== building the firmware ($channel, avr-none, atmega16)"
 (cd "$here/atmega16" && cargo build --release --locked)

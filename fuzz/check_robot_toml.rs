@@ -1,11 +1,12 @@
 //! The invariants the `robot_toml` fuzz target checks, shared with the stable-Rust test
 //! `tests/fuzz_replay.rs` (the `orch` package), which replays the corpus and the regressions
-//! with it. Plain Rust: depends on `orch` and `std` only, so both can include it with `#[path]`.
+//! with it. Plain Rust: depends on `orch`, `orch_robot` and `std` only, so both can include
+//! it with `#[path]`.
 //!
 //! An input is text: bytes that are not UTF-8 are replaced (U+FFFD), so every input is
 //! checked. The same text goes through both of the `orch` program's text readers:
 //!
-//! - `orch::robot::Robot::from_toml` (a `robot.toml`) returns, `Ok` or `Err`, and never
+//! - `orch_robot::Robot::from_toml` (a `robot.toml`) returns, `Ok` or `Err`, and never
 //!   panics; on `Ok` the robot is usable: `interpreter()` builds, `sim_config()` has as many
 //!   boards as the robot, `write_micros()` is a positive finite time;
 //! - `orch::hex::parse_line` (the `--hex` input), line by line, returns and never panics; a
@@ -15,7 +16,7 @@
 use std::fmt::Write;
 
 use orch::hex::parse_line;
-use orch::robot::Robot;
+use orch_robot::Robot;
 
 /// Checks every invariant on one input. Panics on a violation.
 pub fn check(data: &[u8]) {
@@ -36,7 +37,7 @@ fn check_robot(text: &str) {
         panic!("from_toml accepted a configuration the interpreter refuses: {e:#}");
     }
     assert!(
-        (1..=orch::robot::MAX_BOARDS).contains(&robot.boards),
+        (1..=orch_robot::MAX_BOARDS).contains(&robot.boards),
         "{} boards",
         robot.boards
     );

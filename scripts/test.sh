@@ -5,15 +5,19 @@ cd "$(dirname "$0")/.."
 
 step() { printf '\n==> %s\n' "$*"; }
 
-step "toolchain pieces"
-rustup component list --installed 2>/dev/null | grep -q '^clippy' || rustup component add clippy
-rustup component list --installed 2>/dev/null | grep -q '^rustfmt' || rustup component add rustfmt
+# Everything a fresh machine lacks is installed here, before anything builds: every later step
+# (the firmware's lint included) finds its tools in place.
+step "install: Debian packages, the firmware's nightly (firmware/install.sh), rustup pieces"
+# firmware/install.sh: the AVR toolchain, simavr and what avr-tester builds it with, the
+# nightly pinned for the firmware with rust-src and rustfmt. tmux: the live view's test drives
+# `orch play` in a real pseudo-terminal with it.
+bash firmware/install.sh tmux
+# Stable's lint and format tools, and the target the no_std check builds for.
+installed="$(rustup component list --installed)"
+for component in clippy rustfmt; do
+    grep -q "^$component" <<<"$installed" || rustup component add "$component"
+done
 rustup target list --installed | grep -qx thumbv6m-none-eabi || rustup target add thumbv6m-none-eabi
-
-# The live view's test drives `orch play` in a real pseudo-terminal with tmux.
-if ! command -v tmux >/dev/null 2>&1; then
-    (apt-get update -qq && apt-get install -y -qq tmux) >/dev/null || sudo apt-get install -y -qq tmux
-fi
 
 step "format"
 cargo fmt --all -- --check

@@ -54,9 +54,11 @@ pub struct InterpretArgs {
     /// The robot's configuration (see `orch config`); the thesis's robot if not given.
     #[arg(long, value_name = "FILE")]
     pub robot: Option<PathBuf>,
-    /// Turn the safety guard off to show the bare note-to-finger mapping.
-    #[arg(long, value_enum, default_value_t = OnOff::On)]
-    pub guard: OnOff,
+    /// Turn the safety guard off to show the bare note-to-finger mapping, or on whatever the
+    /// robot file says (the flag wins over `guard.enabled`, with a warning). Without it: as
+    /// the robot file says (on unless it has `enabled = false`).
+    #[arg(long, value_enum)]
+    pub guard: Option<OnOff>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

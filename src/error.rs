@@ -19,9 +19,12 @@ pub fn bad_input(message: impl Into<String>) -> anyhow::Error {
     anyhow::Error::new(BadInput(message.into()))
 }
 
-/// 2 for bad input anywhere in the chain, 1 otherwise.
+/// 2 for bad input anywhere in the chain (a [`BadInput`], or a robot configuration that was
+/// refused: [`orch_robot::RobotError`]), 1 otherwise.
 pub fn exit_code(e: &anyhow::Error) -> u8 {
-    if e.chain().any(|c| c.is::<BadInput>()) {
+    if e.chain()
+        .any(|c| c.is::<BadInput>() || c.is::<orch_robot::RobotError>())
+    {
         2
     } else {
         1

@@ -51,14 +51,37 @@ impl<W: Write> FingerBoards for Printer<W> {
     }
 }
 
+/// The warning when `--guard` overrides the robot file's `guard.enabled`.
+fn guard_override(on: bool, path: &std::path::Path) -> String {
+    let (flag, file, now) = if on {
+        ("on", "false", "ON: its limits apply")
+    } else {
+        (
+            "off",
+            "true",
+            "OFF: no hold limit, power budget, re-strike gap or watchdog",
+        )
+    };
+    format!(
+        "orch: WARNING: --guard {flag} overrides `enabled = {file}` in [guard] of {}: \
+         the safety guard is {now}",
+        path.display()
+    )
+}
+
 pub fn run(args: &InterpretArgs) -> anyhow::Result<()> {
-    let robot = match &args.robot {
+    let mut robot = match &args.robot {
         Some(path) => Robot::load(path)?,
         None => Robot::thesis(),
     };
-    let mut robot = robot;
-    if args.guard == OnOff::Off {
-        robot.config.guard.enabled = false;
+    if let Some(flag) = args.guard {
+        let wanted = flag == OnOff::On;
+        if robot.config.guard.enabled != wanted {
+            if let Some(path) = &args.robot {
+                eprintln!("{}", guard_override(wanted, path));
+            }
+        }
+        robot.config.guard.enabled = wanted;
     }
     let mut interp = robot.interpreter()?;
     let stdout = io::stdout();

@@ -20,9 +20,10 @@ use crate::robot::Robot;
 use crate::view::{note_name, Scene, View};
 
 /// Reads and parses a Standard MIDI File; any damage is bad input (exit 2).
+/// The header is checked from the first bytes and the size capped before the file is read
+/// ([`crate::input::read_midi_file`]): `orch play /dev/urandom` is refused at once.
 pub fn load_song(path: &Path) -> anyhow::Result<Song> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| bad_input(format!("cannot read {}: {e}", path.display())))?;
+    let bytes = crate::input::read_midi_file(path)?;
     Song::parse(&bytes).map_err(|e| {
         bad_input(format!(
             "{} is not a playable MIDI file: {e}",
@@ -33,7 +34,7 @@ pub fn load_song(path: &Path) -> anyhow::Result<Song> {
 
 pub fn load_robot(path: Option<&Path>) -> anyhow::Result<Robot> {
     match path {
-        Some(p) => Robot::load(p),
+        Some(p) => Ok(Robot::load(p)?),
         None => Ok(Robot::thesis()),
     }
 }

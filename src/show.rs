@@ -1,10 +1,13 @@
 //! How messages and counters are shown: text in the manner of `aseqdump`, or JSON lines with
 //! mido's message names and fields (channels 0-based).
 
+use std::io::{self, Write};
+
 use orch_core::{Counters, Message};
 use serde_json::{json, Value};
 
-/// A message with the System Exclusive payload the caller collected.
+/// A message with the System Exclusive payload the caller collected: all of it, or its start
+/// (a [`Message::SysEx`] says the full length).
 pub struct Shown<'a> {
     pub message: Message,
     pub sysex: &'a [u8],
@@ -56,17 +59,9 @@ pub fn text(m: &Shown<'_>) -> String {
         }
         SysExStart => "System exclusive start".into(),
         SysEx { len, terminated } => {
-            let mut s = String::from("System exclusive       F0");
-            for b in m.sysex {
-                s.push_str(&format!(" {b:02X}"));
-            }
-            if terminated {
-                s.push_str(" F7");
-            } else {
-                s.push_str(" (cut short by a status byte)");
-            }
-            s.push_str(&format!("  [{len} data bytes]"));
-            s
+            let mut s = Vec::new();
+            write_sysex_text(&mut s, m.sysex, len, terminated).expect("writing to a Vec");
+            String::from_utf8(s).expect("ASCII")
         }
         QuarterFrame(data) => {
             let (t, v) = Message::quarter_frame_parts(data);
@@ -126,6 +121,9 @@ pub fn json(m: &Shown<'_>) -> Option<Value> {
             json!({"type": "pitchwheel", "channel": channel.get(), "pitch": value.centered()})
         }
         SysExStart => return None,
+        SysEx { len, .. } if len as usize > m.sysex.len() => {
+            json!({"type": "sysex", "data": m.sysex, "length": len})
+        }
         SysEx { .. } => json!({"type": "sysex", "data": m.sysex}),
         QuarterFrame(data) => {
             let (t, v) = Message::quarter_frame_parts(data);
@@ -143,15 +141,55 @@ pub fn json(m: &Shown<'_>) -> Option<Value> {
     })
 }
 
-/// The counters as the last line of text.
-pub fn counters_text(c: &Counters) -> String {
+/// Writes a System Exclusive message as one line of text (no newline): `data` is the start of
+/// its payload that was kept, `len` its full length.
+pub fn write_sysex_text(
+    out: &mut impl Write,
+    data: &[u8],
+    len: u32,
+    terminated: bool,
+) -> io::Result<()> {
+    out.write_all(b"System exclusive       F0")?;
+    for b in data {
+        write!(out, " {b:02X}")?;
+    }
+    if data.len() < len as usize {
+        write!(out, " ... ({} more not shown)", len as usize - data.len())?;
+    }
+    if terminated {
+        out.write_all(b" F7")?;
+    } else {
+        out.write_all(b" (cut short by a status byte)")?;
+    }
+    write!(out, "  [{len} data bytes]")
+}
+
+/// Writes a System Exclusive message as one JSON object (no newline), straight from the
+/// bytes: `{"type":"sysex","data":[...]}` as mido has it, with `"length"` added when `data`
+/// is only the start of a payload of `len` bytes.
+pub fn write_sysex_json(out: &mut impl Write, data: &[u8], len: u32) -> io::Result<()> {
+    out.write_all(br#"{"type":"sysex","data":"#)?;
+    serde_json::to_writer(&mut *out, data)?;
+    if data.len() < len as usize {
+        write!(out, r#","length":{len}"#)?;
+    }
+    out.write_all(b"}")
+}
+
+/// The counters as the last line of text; `truncated` is whether the end of the input cut a
+/// message off.
+pub fn counters_text(c: &Counters, truncated: bool) -> String {
     format!(
-        "# {} bytes, {} messages, {} dropped, {} abandoned",
-        c.bytes, c.messages, c.dropped, c.abandoned
+        "# {} bytes, {} messages, {} dropped, {} abandoned, {} truncated",
+        c.bytes,
+        c.messages,
+        c.dropped,
+        c.abandoned,
+        u8::from(truncated)
     )
 }
 
-/// The counters as the last JSON line.
-pub fn counters_json(c: &Counters) -> Value {
-    json!({"type": "summary", "bytes": c.bytes, "messages": c.messages, "dropped": c.dropped, "abandoned": c.abandoned})
+/// The counters as the last JSON line; `truncated` as for [`counters_text`].
+pub fn counters_json(c: &Counters, truncated: bool) -> Value {
+    json!({"type": "summary", "bytes": c.bytes, "messages": c.messages, "dropped": c.dropped, "abandoned": c.abandoned, "truncated": u8::from(truncated)})
 }

@@ -40,7 +40,7 @@ fn decode_json_prints_thesis_table_4_with_mido_names_and_a_summary() {
         r#"{"type":"note_on","channel":0,"note":64,"velocity":127}"#,
         r#"{"type":"note_on","channel":0,"note":67,"velocity":127}"#,
         r#"{"type":"note_off","channel":0,"note":64,"velocity":0}"#,
-        r#"{"type":"summary","bytes":10,"messages":4,"dropped":0,"abandoned":0}"#,
+        r#"{"type":"summary","bytes":10,"messages":4,"dropped":0,"abandoned":0,"truncated":0}"#,
     ];
     assert_eq!(lines.len(), expect.len());
     for (got, want) in lines.iter().zip(expect) {
@@ -103,7 +103,7 @@ fn decode_json_covers_every_message_kind() {
 }
 
 #[test]
-fn decode_sysex_has_no_length_limit_and_skips_realtime_bytes() {
+fn decode_sysex_payload_is_whole_up_to_1_mib_and_skips_realtime_bytes() {
     let mut bytes = vec![0xF0];
     bytes.extend((0..10_000u32).map(|i| (i % 128) as u8));
     bytes.insert(5000, 0xF8);
@@ -135,6 +135,56 @@ fn decode_text_reads_binary_from_a_file_and_ends_with_counters() {
             .unwrap()
             .contains("6 bytes, 1 messages, 1 dropped, 0 abandoned"),
         "{text}"
+    );
+}
+
+#[test]
+fn decode_counts_a_message_cut_off_by_the_end_of_input_as_truncated_not_abandoned() {
+    let (code, out, _) = run(&["decode", "--hex", "--json"], "90 3C 7F 80 3C");
+    assert_eq!(code, 0);
+    let summary = json_lines(&out).pop().unwrap();
+    assert_eq!(summary["type"], "summary");
+    assert_eq!(
+        (summary["truncated"].clone(), summary["abandoned"].clone()),
+        (1.into(), 0.into())
+    );
+    // A SysEx with no end is cut off too; a whole stream is not.
+    let (_, out, _) = run(&["decode", "--hex", "--json"], "F0 01 02");
+    assert_eq!(json_lines(&out).pop().unwrap()["truncated"], 1);
+    let (_, out, _) = run(&["decode", "--hex", "--json"], "90 3C 7F 3D 7F");
+    assert_eq!(json_lines(&out).pop().unwrap()["truncated"], 0);
+    let (_, out, _) = run(&["decode", "--hex"], "90 3C 7F 80");
+    let text = String::from_utf8(out).unwrap();
+    assert!(
+        text.trim_end()
+            .ends_with("4 bytes, 1 messages, 0 dropped, 0 abandoned, 1 truncated"),
+        "{text}"
+    );
+}
+
+#[test]
+fn decode_shows_the_start_and_length_of_a_sysex_longer_than_it_keeps() {
+    let shown = orch::decode::SYSEX_SHOWN;
+    let mut bytes = vec![0xF0];
+    bytes.extend((0..shown + 1000).map(|i| (i % 128) as u8));
+    bytes.push(0xF7);
+    let (code, out, _) = run(&["decode", "--json"], bytes.clone());
+    assert_eq!(code, 0);
+    let lines = json_lines(&out);
+    assert_eq!(lines[0]["type"], "sysex");
+    assert_eq!(lines[0]["data"].as_array().unwrap().len(), shown);
+    assert_eq!(lines[0]["length"], shown + 1000);
+    let (code, out, _) = run(&["decode"], bytes);
+    assert_eq!(code, 0);
+    let text = String::from_utf8(out).unwrap();
+    let first = text.lines().next().unwrap();
+    assert!(
+        first.ends_with(&format!(
+            " ... (1000 more not shown) F7  [{} data bytes]",
+            shown + 1000
+        )),
+        "{}",
+        &first[first.len() - 80..]
     );
 }
 
@@ -200,6 +250,78 @@ fn interpret_guard_delays_a_repeated_note_and_guard_off_does_not() {
     let lines = json_lines(&out);
     assert_eq!(lines[2]["byte"], 8);
     assert_eq!(lines[2]["outputs"], 256);
+}
+
+#[test]
+fn interpret_guard_on_wins_over_a_robot_file_that_disables_it_and_says_so() {
+    let dir = std::env::temp_dir().join(format!("orch-guard-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let off = dir.join("guard-off.toml");
+    std::fs::write(&off, "[guard]\nenabled = false\n").unwrap();
+    let off = off.to_str().unwrap();
+    // On, off, on again at once: only the guard delays the re-strike.
+    let hex = "90 3C 7F 80 3C 00 90 3C 7F";
+    let restruck_by_byte_8 = |out: &[u8]| {
+        json_lines(out)
+            .iter()
+            .any(|l| l["byte"] == 8 && l["outputs"] == 256)
+    };
+    // The file alone: no guard, the note re-strikes at byte 8, and nothing is said.
+    let (code, out, err) = run(&["interpret", "--hex", "--json", "--robot", off], hex);
+    assert_eq!(code, 0);
+    assert!(restruck_by_byte_8(&out));
+    assert!(err.is_empty(), "{err}");
+    // --guard on wins: the re-strike waits, and stderr says so loudly.
+    let (code, out, err) = run(
+        &[
+            "interpret",
+            "--hex",
+            "--json",
+            "--robot",
+            off,
+            "--guard",
+            "on",
+        ],
+        hex,
+    );
+    assert_eq!(code, 0);
+    assert!(!restruck_by_byte_8(&out), "the guard must be on");
+    assert!(
+        err.contains("WARNING") && err.contains("--guard on") && err.contains("guard-off.toml"),
+        "{err}"
+    );
+    assert!(err.contains("safety guard is ON"), "{err}");
+    // --guard off over a file that has it on says so too; agreeing flags say nothing.
+    let on = dir.join("guard-on.toml");
+    std::fs::write(&on, "[guard]\nenabled = true\n").unwrap();
+    let on = on.to_str().unwrap();
+    let (_, out, err) = run(
+        &[
+            "interpret",
+            "--hex",
+            "--json",
+            "--robot",
+            on,
+            "--guard",
+            "off",
+        ],
+        hex,
+    );
+    assert!(restruck_by_byte_8(&out));
+    assert!(err.contains("safety guard is OFF"), "{err}");
+    let (_, _, err) = run(
+        &[
+            "interpret",
+            "--hex",
+            "--json",
+            "--robot",
+            on,
+            "--guard",
+            "on",
+        ],
+        hex,
+    );
+    assert!(err.is_empty(), "{err}");
 }
 
 #[test]

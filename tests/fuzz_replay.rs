@@ -39,7 +39,7 @@ fn good_seeds_are_accepted_and_bad_seeds_refused() {
         }
         let text = std::fs::read_to_string(&file).unwrap();
         match (
-            orch::robot::Robot::from_toml(&text),
+            orch_robot::Robot::from_toml(&text),
             name.starts_with("bad-"),
         ) {
             (Ok(_), true) => wrong.push(format!("{name}: accepted")),
@@ -53,7 +53,7 @@ fn good_seeds_are_accepted_and_bad_seeds_refused() {
 #[test]
 fn the_default_seed_is_the_default_configuration() {
     let seed = std::fs::read_to_string(fuzz_dir().join("corpus/robot_toml/default.toml")).unwrap();
-    assert_eq!(seed, orch::robot::DEFAULT_TOML);
+    assert_eq!(seed, orch_robot::DEFAULT_TOML);
 }
 
 #[test]

@@ -4,9 +4,12 @@
 //! Real-Time Messages" and "Data Types"):
 //!
 //! - Running status applies to channel voice messages (0x80..=0xEF). System Exclusive and
-//!   System Common status bytes (0xF0..=0xF7) cancel it; real-time bytes (0xF8..=0xFF) do not.
+//!   System Common status bytes (0xF0..=0xF7) cancel it; real-time bytes (0xF8..=0xFE) do not.
 //! - A real-time byte may arrive anywhere, even between the data bytes of a message or inside
 //!   a System Exclusive message. It is emitted at once and the interrupted message continues.
+//! - System Reset (0xFF) is emitted at once like the others, and like them lets a message it
+//!   interrupts finish, but it cancels running status, as a return to the power-up state must:
+//!   once the interrupted message (if any) is complete, data bytes need a new status byte.
 //! - 0xF4 and 0xF5 are undefined: ignored, and they cancel running status. 0xF9 and 0xFD are
 //!   undefined real-time bytes: ignored with no other effect.
 //! - A data byte with no status to attach to is dropped (counted in [`Counters::dropped`]).
@@ -14,7 +17,9 @@
 //!   abandons it: nothing is emitted for it and [`Counters::abandoned`] counts it once.
 //! - Any status byte other than real-time ends a System Exclusive message. One ended that way
 //!   is still emitted, with `terminated: false`. A lone 0xF7 is ignored.
-//! - A stream that ends inside a message emits nothing for it.
+//! - A stream that ends inside a message (or a System Exclusive message) emits nothing for
+//!   it, and it is not counted as abandoned: [`Decoder::finish`] says the input has ended and
+//!   whether it cut a message off.
 
 use crate::message::Message;
 use crate::values::{Channel, Note, Velocity, U14, U7};
@@ -30,7 +35,8 @@ pub struct Counters {
     pub messages: u32,
     /// Data bytes dropped because no status byte was in force.
     pub dropped: u32,
-    /// Messages abandoned because a status byte arrived before they were complete.
+    /// Messages abandoned because a status byte (or System Reset) arrived before they were
+    /// complete.
     pub abandoned: u32,
 }
 
@@ -83,6 +89,9 @@ pub struct Decoder<const SYSEX: usize = 0> {
     need: u8,
     /// A message has begun (status or first running-status data byte) and is not complete.
     pending: bool,
+    /// A System Reset arrived while the message in progress was incomplete: its status is
+    /// not kept as running status once it completes.
+    forget_status: bool,
     /// Inside a System Exclusive message.
     in_sysex: bool,
     sysex_len: u32,
@@ -118,6 +127,7 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
             have: 0,
             need: 0,
             pending: false,
+            forget_status: false,
             in_sysex: false,
             sysex_len: 0,
             sysex: [0; SYSEX],
@@ -138,6 +148,27 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
     /// Whether a System Exclusive message is being received.
     pub const fn in_sysex(&self) -> bool {
         self.in_sysex
+    }
+
+    /// Whether a message has begun and is not complete: a status byte (or, under running
+    /// status, a first data byte) is waiting for its data, or a System Exclusive message is
+    /// open. Running status alone, with no data byte yet, is not pending.
+    pub const fn pending(&self) -> bool {
+        self.pending || self.in_sysex
+    }
+
+    /// Says the input has ended (end of file, a closed port) and returns whether it cut a
+    /// message off (a System Exclusive message too): [`pending`](Self::pending) before the
+    /// end. Nothing is emitted for that message and it is not counted as abandoned; the
+    /// decoder is then as after power-up, ready for a new stream, its counters kept.
+    ///
+    /// The answer is not kept in [`Counters`], so that the decoder an MCU keeps does not grow
+    /// for a count a live line never needs; a host that reads files counts it itself.
+    #[must_use = "it says whether the end of the input cut a message off"]
+    pub fn finish(&mut self) -> bool {
+        let cut = self.pending();
+        self.reset();
+        cut
     }
 
     /// The stored start of the latest System Exclusive message: at most `SYSEX` bytes.
@@ -173,6 +204,8 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
         self.counters.bytes = self.counters.bytes.wrapping_add(1);
         if byte < 0x80 {
             self.data_byte(byte, emit);
+        } else if byte == 0xFF {
+            self.system_reset(emit);
         } else if byte >= 0xF8 {
             if let Some(message) = realtime(byte) {
                 self.emit(emit, message);
@@ -188,6 +221,17 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
             self.counters.messages = self.counters.messages.wrapping_add(1);
         }
         emit(message);
+    }
+
+    /// System Reset: running status is cancelled, now or, if a message is in progress, once
+    /// it is complete. Then [`Message::Reset`].
+    fn system_reset<F: FnMut(Message)>(&mut self, out: &mut F) {
+        if self.pending {
+            self.forget_status = true;
+        } else {
+            self.status = 0;
+        }
+        self.emit(out, Message::Reset);
     }
 
     fn status_byte<F: FnMut(Message)>(&mut self, byte: u8, out: &mut F) {
@@ -208,6 +252,7 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
             self.counters.abandoned = self.counters.abandoned.wrapping_add(1);
         }
         self.pending = false;
+        self.forget_status = false;
         self.have = 0;
         self.status = 0;
         match byte {
@@ -249,9 +294,10 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
         self.have = 0;
         self.pending = false;
         let message = complete(self.status, self.data);
-        if self.status >= 0xF0 {
-            // System Common messages have no running status.
+        if self.status >= 0xF0 || self.forget_status {
+            // System Common messages have no running status, and none survives a reset.
             self.status = 0;
+            self.forget_status = false;
         }
         self.emit(out, message);
     }
@@ -264,8 +310,7 @@ fn realtime(byte: u8) -> Option<Message> {
         0xFB => Message::Continue,
         0xFC => Message::Stop,
         0xFE => Message::ActiveSensing,
-        0xFF => Message::Reset,
-        // 0xF9 and 0xFD are undefined.
+        // 0xFF (System Reset) is handled by `system_reset`; 0xF9 and 0xFD are undefined.
         _ => return None,
     })
 }

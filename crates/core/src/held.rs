@@ -37,6 +37,10 @@ pub trait HeldNotes: Clone + core::fmt::Debug {
     /// Forgets every note of `channel` that only the pedal holds.
     fn release_sustained(&mut self, channel: Channel);
 
+    /// Marks every played note of `channel` as held by the pedal (All Notes Off while the
+    /// pedal is down).
+    fn sustain_channel(&mut self, channel: Channel);
+
     /// Forgets every note of `channel`, played or sustained.
     fn remove_channel(&mut self, channel: Channel);
 
@@ -92,6 +96,15 @@ impl HeldNotes for NoteTable {
     fn release_sustained(&mut self, channel: Channel) {
         for slot in self.sustained.iter_mut() {
             *slot &= !channel.bit();
+        }
+    }
+
+    fn sustain_channel(&mut self, channel: Channel) {
+        for (p, s) in self.played.iter_mut().zip(self.sustained.iter_mut()) {
+            if *p & channel.bit() != 0 {
+                *p &= !channel.bit();
+                *s |= channel.bit();
+            }
         }
     }
 
@@ -214,6 +227,14 @@ impl<const N: usize> HeldNotes for NotePool<N> {
         self.retain(|tag, _| tag & SUSTAINED == 0 || ((tag >> 7) & 0x0F) as u8 != channel.get());
     }
 
+    fn sustain_channel(&mut self, channel: Channel) {
+        for tag in &mut self.notes[..self.len as usize] {
+            if ((*tag >> 7) & 0x0F) as u8 == channel.get() {
+                *tag |= SUSTAINED;
+            }
+        }
+    }
+
     fn remove_channel(&mut self, channel: Channel) {
         self.retain(|tag, _| ((tag >> 7) & 0x0F) as u8 != channel.get());
     }
@@ -287,6 +308,32 @@ mod tests {
         h.insert(ch(1), n(62), 26);
         let g = h.contains(ch(1), n(62));
         [a, b, c, d, e, f, g]
+    }
+
+    /// All Notes Off under the pedal: every played note of the channel becomes sustained,
+    /// other channels' notes stay played, and the pedal going up lets them go.
+    fn exercise_sustain_channel<H: HeldNotes>() -> [bool; 6] {
+        let r = KeyRange::THESIS;
+        let p = OutOfRange::Fold;
+        let mut h = H::EMPTY;
+        h.insert(ch(0), n(60), 24);
+        h.insert(ch(0), n(64), 28);
+        h.insert(ch(1), n(67), 31);
+        h.sustain_channel(ch(0));
+        let a = !h.contains(ch(0), n(60)) && !h.contains(ch(0), n(64));
+        let b = h.holds_key(24, r, p, true) && h.holds_key(28, r, p, true);
+        let c = !h.holds_key(24, r, p, false);
+        let d = h.contains(ch(1), n(67));
+        h.release_sustained(ch(0));
+        let e = !h.holds_key(24, r, p, true) && !h.holds_key(28, r, p, true);
+        let f = h.holds_key(31, r, p, false);
+        [a, b, c, d, e, f]
+    }
+
+    #[test]
+    fn sustain_channel_holds_a_channels_notes_by_the_pedal_in_both_stores() {
+        assert_eq!(exercise_sustain_channel::<NoteTable>(), [true; 6]);
+        assert_eq!(exercise_sustain_channel::<NotePool<8>>(), [true; 6]);
     }
 
     #[test]

@@ -429,8 +429,11 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
                 }
                 // Reset All Controllers lets the pedal up.
                 121 => self.pedal_up(channel, now),
-                // All Sound Off, All Notes Off, and the mode messages that imply All Notes Off.
-                120 | 123..=127 => self.channel_off(channel, now),
+                // All Sound Off: silence now, the pedal's notes too.
+                120 => self.channel_off(channel, true, now),
+                // All Notes Off, and the mode messages that imply it: like a Note-Off for each
+                // note, so a pedal that is down keeps them sustained (MIDI 1.0).
+                123..=127 => self.channel_off(channel, false, now),
                 _ => {}
             },
             Message::ActiveSensing => self.sensing = true,
@@ -579,9 +582,17 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         self.release_unheld(now);
     }
 
-    fn channel_off(&mut self, channel: Channel, now: Instant) {
-        self.notes.remove_channel(channel);
-        self.pedals &= !channel.bit();
+    /// Switches off every note of `channel`. All Sound Off (`sound_off`) lets go of the
+    /// pedal's notes as well; All Notes Off leaves a pedal that is down holding them, as
+    /// each note's own Note-Off would.
+    fn channel_off(&mut self, channel: Channel, sound_off: bool, now: Instant) {
+        let pedal = self.config.sustain && self.pedals & channel.bit() != 0;
+        if pedal && !sound_off {
+            self.notes.sustain_channel(channel);
+        } else {
+            self.notes.remove_channel(channel);
+            self.pedals &= !channel.bit();
+        }
         self.release_unheld(now);
     }
 

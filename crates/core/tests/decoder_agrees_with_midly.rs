@@ -1,7 +1,7 @@
 //! Guards: on well-formed live streams (channel voice messages on all channels, with running
-//! status wherever the sender may use it, and real-time bytes anywhere, even between data
-//! bytes), orch's decoder gives exactly what an independent implementation gives: midly's
-//! `MidiStream`.
+//! status wherever the sender may use it, and real-time bytes other than System Reset anywhere,
+//! even between data bytes), orch's decoder gives exactly what an independent implementation
+//! gives: midly's `MidiStream`.
 
 mod common;
 
@@ -83,7 +83,9 @@ proptest! {
     #[test]
     fn well_formed_streams_decode_as_midly_decodes_them(
         messages in prop::collection::vec(channel_message(), 0..40),
-        realtime in prop::collection::vec((any::<prop::sample::Index>(), 0xF8u8..=0xFF), 0..10),
+        // 0xF8..=0xFE: midly treats System Reset (0xFF) like any real-time byte, while orch's
+        // decoder goes back to its power-up state (decoder_rules.rs guards that).
+        realtime in prop::collection::vec((any::<prop::sample::Index>(), 0xF8u8..=0xFE), 0..10),
         running_status in any::<bool>(),
     ) {
         let mut bytes = Vec::new();

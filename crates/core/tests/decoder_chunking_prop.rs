@@ -67,8 +67,11 @@ proptest! {
         // Each byte is accounted for at most once as dropped.
         let data_bytes = bytes.iter().filter(|&&b| b < 0x80).count() as u32;
         prop_assert!(counters.dropped <= data_bytes);
-        // Only a status byte can abandon a message.
-        let status_bytes = bytes.iter().filter(|&&b| (0x80..0xF8).contains(&b)).count() as u32;
+        // Only a status byte or System Reset can abandon a message.
+        let status_bytes = bytes
+            .iter()
+            .filter(|&&b| (0x80..0xF8).contains(&b) || b == 0xFF)
+            .count() as u32;
         prop_assert!(counters.abandoned <= status_bytes);
         // Real-time bytes each emit one message, except 0xF9 and 0xFD.
         let realtime = bytes.iter().filter(|&&b| b >= 0xF8 && b != 0xF9 && b != 0xFD).count();
@@ -88,6 +91,13 @@ proptest! {
         let mut want_sysex = model.last_sysex.clone();
         want_sysex.truncate(6);
         prop_assert_eq!(sysex, want_sysex);
+        // The end of the input: a message it cut off is truncated, not abandoned.
+        let mut d = Decoder::<6>::new();
+        d.push_slice(&bytes, |_| {});
+        prop_assert_eq!(d.pending(), model.pending());
+        prop_assert_eq!(d.finish(), model.finish());
+        prop_assert!(!d.pending());
+        prop_assert_eq!(d.counters(), model.counters);
     }
 }
 
@@ -100,6 +110,8 @@ struct Model {
     data: Vec<u8>,
     /// A message has begun and is not complete.
     in_progress: bool,
+    /// A System Reset came while a message was in progress: no running status after it.
+    forget_status: bool,
     /// The payload of the SysEx being received.
     sysex: Option<Vec<u8>>,
     /// The payload of the latest SysEx (the one being received, or the last one).
@@ -112,7 +124,17 @@ impl Model {
         self.counters.bytes += 1;
         let mut out = Vec::new();
         match byte {
-            0xF8..=0xFF => {
+            0xFF => {
+                // System Reset: emitted at once; a message in progress still completes, but
+                // no running status survives it.
+                if self.in_progress {
+                    self.forget_status = true;
+                } else {
+                    self.status = None;
+                }
+                out.push(Message::Reset);
+            }
+            0xF8..=0xFE => {
                 // Real-time: emitted at once, nothing else changes.
                 let m = match byte {
                     0xF8 => Some(Message::Clock),
@@ -120,7 +142,6 @@ impl Model {
                     0xFB => Some(Message::Continue),
                     0xFC => Some(Message::Stop),
                     0xFE => Some(Message::ActiveSensing),
-                    0xFF => Some(Message::Reset),
                     _ => None, // 0xF9, 0xFD: ignored
                 };
                 out.extend(m);
@@ -141,6 +162,7 @@ impl Model {
                     self.counters.abandoned += 1;
                 }
                 self.in_progress = false;
+                self.forget_status = false;
                 self.data.clear();
                 self.status = None; // 0xF0..=0xF7 cancel running status
                 match byte {
@@ -172,8 +194,10 @@ impl Model {
                         out.push(message(status, &self.data));
                         self.data.clear();
                         self.in_progress = false;
-                        if status >= 0xF0 {
-                            self.status = None; // no running status for system common
+                        if status >= 0xF0 || self.forget_status {
+                            // No running status for system common, nor after a reset.
+                            self.status = None;
+                            self.forget_status = false;
                         }
                     }
                 } else {
@@ -183,6 +207,22 @@ impl Model {
         }
         self.count(&out);
         out
+    }
+
+    /// Whether a message (or a SysEx) has begun and is not complete.
+    fn pending(&self) -> bool {
+        self.in_progress || self.sysex.is_some()
+    }
+
+    /// The end of the input: whether a message was cut off; then the power-up state.
+    fn finish(&mut self) -> bool {
+        let cut = self.pending();
+        let counters = self.counters;
+        *self = Model {
+            counters,
+            ..Model::default()
+        };
+        cut
     }
 
     fn count(&mut self, out: &[Message]) {

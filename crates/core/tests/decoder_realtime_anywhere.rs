@@ -1,8 +1,10 @@
-//! Guards: a real-time byte (0xF8..=0xFF) may arrive anywhere, even between the data bytes of
+//! Guards: a real-time byte (0xF8..=0xFE) may arrive anywhere, even between the data bytes of
 //! a message or inside SysEx. It is emitted at once, at the position it was inserted, and
 //! changes nothing else: the interrupted message, running status, SysEx data and the dropped
 //! and abandoned counts stay exactly as without it. 0xF9 and 0xFD emit nothing at all.
 //! (The original interpreter broke the message when a clock byte fell inside it.)
+//! System Reset (0xFF) does all that too, except that no running status survives it
+//! (`decoder_rules.rs` guards that), so the properties over whole streams leave it out.
 
 mod common;
 
@@ -13,9 +15,9 @@ use common::{
 use orch_core::{Counters, Message};
 use proptest::prelude::*;
 
-/// Every real-time byte, defined or not.
+/// Every real-time byte, defined or not, except System Reset.
 fn all_realtime() -> Vec<u8> {
-    (0xF8..=0xFF).collect()
+    (0xF8..=0xFE).collect()
 }
 
 /// Streams of several kinds: every channel voice type, running status, system common, SysEx
@@ -133,7 +135,7 @@ proptest! {
     #[test]
     fn realtime_bytes_inserted_anywhere_in_any_stream(
         base in byte_stream(64).prop_map(|v| v.into_iter().filter(|&b| b < 0xF8).collect::<Vec<u8>>()),
-        inserts in prop::collection::vec((any::<prop::sample::Index>(), 0xF8u8..=0xFF), 1..8),
+        inserts in prop::collection::vec((any::<prop::sample::Index>(), 0xF8u8..=0xFE), 1..8),
     ) {
         let (per_byte, base_counters) = decode_per_byte(&base);
         let (_, _, base_sysex) = decode_with_sysex::<4>(&base);

@@ -147,7 +147,7 @@ fn sysex_and_system_common_cancel_running_status() {
 
 #[test]
 fn realtime_bytes_do_not_cancel_running_status() {
-    for rt in 0xF8..=0xFFu8 {
+    for rt in 0xF8..=0xFEu8 {
         let (got, counters) = decode(&[0x90, 0x3C, 0x7F, rt, 0x3D, 0x7F]);
         assert_eq!(got.first(), Some(&note_on(0, 0x3C, 0x7F)));
         assert_eq!(got.last(), Some(&note_on(0, 0x3D, 0x7F)), "{rt:02X}");
@@ -356,6 +356,89 @@ fn a_stream_ending_inside_a_message_emits_nothing_for_it() {
     let (got, counters) = decode(&[0xF0, 0x01, 0x02]);
     assert_eq!(got, vec![Message::SysExStart]);
     assert_eq!(counters.messages, 0);
+}
+
+/// The end of the input is not a status byte: `finish` says a message was cut off, and it is
+/// never counted as abandoned; a stream that ends between messages cut nothing.
+#[test]
+fn a_message_cut_off_by_the_end_of_input_is_reported_by_finish_not_abandoned() {
+    for (bytes, cut) in [
+        (&[0x90][..], true),
+        (&[0x90, 0x3C], true),
+        (&[0x90, 0x3C, 0x7F, 0x3D], true),
+        (&[0xF2, 0x00], true),
+        (&[0xF0, 0x01, 0x02], true),
+        (&[0xF0], true),
+        (&[0x90, 0x3C, 0x7F], false),
+        // Running status in force but no data byte yet: nothing was cut.
+        (&[0x90, 0x3C, 0x7F, 0xF8], false),
+        (&[0xF0, 0x01, 0xF7], false),
+        (&[0x3C], false),
+        (&[], false),
+    ] {
+        let mut d = Decoder::<0>::new();
+        d.push_slice(bytes, |_| {});
+        assert_eq!(d.pending(), cut, "{bytes:02X?}");
+        assert_eq!(d.finish(), cut, "{bytes:02X?}");
+        assert_eq!(d.counters().abandoned, 0, "{bytes:02X?}");
+        assert_eq!(d.counters().bytes, bytes.len() as u32, "counters are kept");
+        assert!(!d.pending());
+        // After `finish` the decoder starts a new stream: no running status is left.
+        let mut got = Vec::new();
+        d.push_slice(&[0x3C, 0x7F], |m| got.push(m));
+        assert!(got.is_empty(), "{bytes:02X?}: {got:?}");
+        assert!(!d.finish(), "{bytes:02X?}");
+    }
+}
+
+/// System Reset puts the receiver back in its power-up state (MIDI 1.0): running status is
+/// gone, so data bytes after it are dropped, not played with the old status. The original
+/// decoder (and midly) let `90 40 64 FF 3C 64` play a second note.
+#[test]
+fn system_reset_clears_running_status() {
+    let (got, counters) = decode(&[0x90, 0x40, 0x64, 0xFF, 0x3C, 0x64]);
+    assert_eq!(got, vec![note_on(0, 0x40, 0x64), Message::Reset]);
+    assert_eq!((counters.dropped, counters.abandoned), (2, 0));
+    // A new status byte after it works as ever.
+    let (got, _) = decode(&[0x90, 0x40, 0x64, 0xFF, 0x90, 0x3C, 0x64]);
+    assert_eq!(
+        got,
+        vec![
+            note_on(0, 0x40, 0x64),
+            Message::Reset,
+            note_on(0, 0x3C, 0x64)
+        ]
+    );
+}
+
+/// A System Reset inside a message is emitted at once and the message still completes, like
+/// any real-time byte; but its status is not kept as running status afterwards. Inside a
+/// SysEx it changes nothing (a SysEx cancels running status anyway).
+#[test]
+fn system_reset_inside_a_message_lets_it_finish_then_cancels_running_status() {
+    let (got, counters) = decode(&[0x90, 0x40, 0xFF, 0x64, 0x3C, 0x64]);
+    assert_eq!(got, vec![Message::Reset, note_on(0, 0x40, 0x64)]);
+    assert_eq!((counters.abandoned, counters.dropped), (0, 2));
+    // Between the data bytes of a running-status message too.
+    let (got, counters) = decode(&[0x90, 0x40, 0x64, 0x3C, 0xFF, 0x64, 0x3E, 0x64]);
+    assert_eq!(
+        got,
+        vec![
+            note_on(0, 0x40, 0x64),
+            Message::Reset,
+            note_on(0, 0x3C, 0x64)
+        ]
+    );
+    assert_eq!(counters.dropped, 2);
+    // A new status byte after the reset is kept as running status again.
+    let (got, _) = decode(&[0x90, 0x40, 0xFF, 0x64, 0x90, 0x3C, 0x64, 0x3E, 0x64]);
+    assert_eq!(got.len(), 4, "{got:?}");
+    let (got, counters) = decode(&[0xF0, 0x01, 0xFF, 0x02, 0xF7]);
+    assert_eq!(
+        got,
+        vec![Message::SysExStart, Message::Reset, sysex(2, true)]
+    );
+    assert_eq!((counters.abandoned, counters.dropped), (0, 0));
 }
 
 #[test]

@@ -222,3 +222,16 @@ fn all_notes_off_on_another_channel_does_not_cut_a_short_delayed_strike() {
         ]
     );
 }
+
+/// System Reset cancels running status: `FF 3C 64` after a Note-On plays no note (the old
+/// decoder kept the 0x90 status and struck note 60 after the reset).
+#[test]
+fn system_reset_then_data_bytes_play_no_note() {
+    let mut rig = Rig::thesis();
+    rig.feed(&[0x90, 64, 100], ms(0));
+    assert!(rig.note_down(64));
+    rig.feed(&[0xFF, 60, 100], ms(100));
+    assert!(!rig.note_down(64), "the reset released the key");
+    assert!(!rig.note_down(60), "no running status survives a reset");
+    assert!(rig.edges_of(60).is_empty());
+}

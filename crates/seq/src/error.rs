@@ -50,6 +50,16 @@ pub enum SeqError {
         /// What is wrong.
         reason: &'static str,
     },
+    /// A Set Tempo meta event says 0 µs per quarter note: time would stand still, and every
+    /// later note would sound at the same instant.
+    ZeroTempo {
+        /// 0-based track index.
+        track: u16,
+        /// The tick of the event, counted from the start of its track.
+        tick: u64,
+        /// Offset of the event's first byte (its delta time).
+        offset: usize,
+    },
 }
 
 impl fmt::Display for SeqError {
@@ -88,6 +98,17 @@ impl fmt::Display for SeqError {
             } => write!(
                 f,
                 "track {}: {reason} (at byte {offset})",
+                u32::from(*track) + 1
+            ),
+            SeqError::ZeroTempo {
+                track,
+                tick,
+                offset,
+            } => write!(
+                f,
+                "track {}: a Set Tempo of 0 µs per quarter note at tick {tick} (at byte \
+                 {offset}); a tempo must be longer than 0, or every later note would sound at \
+                 once",
                 u32::from(*track) + 1
             ),
         }

@@ -351,6 +351,13 @@ fn read_track(
                 }
             }
             TrackEventKind::Meta(meta) => match meta {
+                MetaMessage::Tempo(t) if t.as_int() == 0 => {
+                    return Err(SeqError::ZeroTempo {
+                        track: index,
+                        tick,
+                        offset: bytes.offset + start,
+                    });
+                }
                 MetaMessage::Tempo(t) => out.tempos.push((tick, t.as_int())),
                 MetaMessage::TimeSignature(n, d, _, _) => out.signatures.push((tick, n, d)),
                 MetaMessage::TrackName(name) if out.name.is_none() => {
@@ -396,7 +403,8 @@ impl Song {
     /// Damage is an error, never a panic: an empty file, a missing `MThd`, a format other than
     /// 0–2, an unplayable division, fewer tracks than declared, a chunk longer than the file,
     /// an event cut short or running past its chunk, a data byte with no running status, a
-    /// status byte inside a message, a system common or real-time status in a track. Nothing
+    /// status byte inside a message, a system common or real-time status in a track, a Set
+    /// Tempo of 0 µs per quarter note ([`SeqError::ZeroTempo`]). Nothing
     /// is allocated from a declared length: only from bytes actually present.
     pub fn parse(bytes: &[u8]) -> Result<Song, SeqError> {
         let chunks = smf::split(bytes)?;

@@ -212,3 +212,44 @@ proptest! {
         let _ = Song::parse(&bytes);
     }
 }
+
+#[test]
+fn a_zero_tempo_is_an_error_naming_the_track_and_tick() {
+    // Format 1: a tempo track that is fine, and a second track that sets 0 µs per quarter
+    // note at tick 960 (after a note at tick 0 and 480).
+    let file = smf(
+        1,
+        480,
+        &[
+            vec![(0, common::tempo(500_000))],
+            vec![
+                (0, on(0, 60)),
+                (480, on(0, 62)),
+                (480, common::tempo(0)),
+                (0, on(0, 64)),
+            ],
+        ],
+    );
+    let e = Song::parse(&file).unwrap_err();
+    let SeqError::ZeroTempo {
+        track,
+        tick,
+        offset,
+    } = e
+    else {
+        panic!("not ZeroTempo: {e:?}");
+    };
+    assert_eq!((track, tick), (1, 960));
+    // The event's delta time (480 = 83 60) is at `offset`, then FF 51 03 00 00 00.
+    assert_eq!(
+        &file[offset..offset + 8],
+        &[0x83, 0x60, 0xFF, 0x51, 0x03, 0, 0, 0]
+    );
+    let message = e.to_string();
+    assert!(message.contains("track 2"), "{message}");
+    assert!(message.contains("tick 960"), "{message}");
+    assert!(message.contains("0 µs per quarter"), "{message}");
+    // The smallest tempo there is, 1 µs per quarter, is still played.
+    let file = smf(1, 480, &[vec![(0, common::tempo(1)), (0, on(0, 60))]]);
+    assert!(Song::parse(&file).is_ok());
+}

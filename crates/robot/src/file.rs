@@ -1,0 +1,630 @@
+//! The file's shape (serde) and how it becomes a [`Robot`].
+
+use orch_core::{
+    BoardSpan, Channel, ChannelMask, Config, ConfigError, Duration, GuardConfig, KeyRange, Layout,
+    Note, OutOfRange,
+};
+use orch_sim::{BusClock, KeyMechanics, MechanicsConfig};
+use serde::Deserialize;
+
+use crate::{Robot, RobotError, MAX_BOARDS, MAX_KEYS};
+
+/// Parses and checks a configuration.
+pub(crate) fn parse(text: &str) -> Result<Robot, RobotError> {
+    let file: File = toml::from_str(text).map_err(|e| RobotError::Syntax(e.to_string()))?;
+    file.into_robot()
+}
+
+/// The field at fault when the core refuses a configuration.
+pub(crate) fn config_error(e: ConfigError) -> RobotError {
+    let field = match e {
+        ConfigError::LayoutKeys { .. } => "boards".to_string(),
+        ConfigError::BoardBits { board } => format!("boards[{board}]"),
+        ConfigError::TooManyKeys { .. } => "keys".to_string(),
+        ConfigError::LimitTooLong => "guard".to_string(),
+        ConfigError::NoKeysAllowed => "guard.max_keys_down".to_string(),
+        ConfigError::BadDuty | ConfigError::DutyUnsupported => "guard.duty_max_on".to_string(),
+    };
+    RobotError::field(field, e.to_string())
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct File {
+    #[serde(default)]
+    keys: Keys,
+    boards: Option<Vec<Board>>,
+    #[serde(default)]
+    bus: Bus,
+    #[serde(default)]
+    mechanics: Mechanics,
+    #[serde(default)]
+    guard: Guard,
+}
+
+// Integers are read as TOML's own i64 and checked here, so that a value out of range is
+// refused naming the field and the range, not with serde's "expected u8".
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct Keys {
+    low: i64,
+    high: i64,
+    out_of_range: Policy,
+    // "all" or a list of 1..=16: read as any TOML value and checked here, so that a wrong
+    // one gets a message saying what to write.
+    channels: toml::Value,
+    sustain: bool,
+    overlap: OverlapWord,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum OverlapWord {
+    Hold,
+    Restrike,
+}
+
+impl Default for Keys {
+    fn default() -> Self {
+        Self {
+            low: 36,
+            high: 96,
+            out_of_range: Policy::Fold,
+            channels: toml::Value::String("all".into()),
+            sustain: false,
+            overlap: OverlapWord::Restrike,
+        }
+    }
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum Policy {
+    Fold,
+    Drop,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Board {
+    address: i64,
+    keys: i64,
+    #[serde(default)]
+    first_bit: i64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct Bus {
+    clock: String,
+}
+
+impl Default for Bus {
+    fn default() -> Self {
+        Self {
+            clock: "400kHz".into(),
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct Mechanics {
+    press_delay: String,
+    release_delay: String,
+    min_hold: String,
+    key: Vec<KeyFigures>,
+}
+
+impl Default for Mechanics {
+    fn default() -> Self {
+        Self {
+            press_delay: "15ms".into(),
+            release_delay: "25ms".into(),
+            min_hold: "8ms".into(),
+            key: Vec::new(),
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KeyFigures {
+    note: i64,
+    press_delay: Option<String>,
+    release_delay: Option<String>,
+    min_hold: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct Guard {
+    enabled: bool,
+    max_hold: String,
+    max_keys_down: i64,
+    restrike_gap: String,
+    min_press: String,
+    watchdog: String,
+    late_limit: String,
+    duty_window: String,
+    duty_max_on: String,
+}
+
+impl Default for Guard {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            max_hold: "10s".into(),
+            max_keys_down: 16,
+            restrike_gap: "60ms".into(),
+            min_press: "20ms".into(),
+            watchdog: "4s".into(),
+            late_limit: "30ms".into(),
+            duty_window: "60s".into(),
+            duty_max_on: "30s".into(),
+        }
+    }
+}
+
+/// An integer field that must lie in `lo..=hi`; `what` says what the number is.
+fn int(field: &str, value: i64, lo: u8, hi: u8, what: &str) -> Result<u8, RobotError> {
+    if (i64::from(lo)..=i64::from(hi)).contains(&value) {
+        Ok(value as u8)
+    } else {
+        Err(RobotError::field(
+            field,
+            format!("{value} is out of range: {what} is {lo}..={hi}"),
+        ))
+    }
+}
+
+/// What `keys.channels` accepts.
+const CHANNELS_HELP: &str =
+    "write \"all\" or a list of channels as people count them, 1..=16, such as [1, 2, 10]";
+
+/// Reads `keys.channels`: `"all"` or a non-empty list of channels 1..=16.
+fn channels(value: &toml::Value) -> Result<ChannelMask, RobotError> {
+    const FIELD: &str = "keys.channels";
+    match value {
+        toml::Value::String(s) if s == "all" => Ok(ChannelMask::ALL),
+        toml::Value::Array(list) if list.is_empty() => Err(RobotError::field(
+            FIELD,
+            format!("[] listens to no channel at all; {CHANNELS_HELP}"),
+        )),
+        toml::Value::Array(list) => {
+            let mut mask = ChannelMask::NONE;
+            for (i, item) in list.iter().enumerate() {
+                let ch = item
+                    .as_integer()
+                    .filter(|c| (1..=16).contains(c))
+                    .and_then(|c| Channel::new(c as u8 - 1))
+                    .ok_or_else(|| {
+                        RobotError::field(
+                            format!("{FIELD}[{i}]"),
+                            format!("{item} is not a channel; {CHANNELS_HELP}"),
+                        )
+                    })?;
+                mask = mask.with(ch);
+            }
+            Ok(mask)
+        }
+        other => Err(RobotError::field(
+            FIELD,
+            format!("{other} is not a channel list; {CHANNELS_HELP}"),
+        )),
+    }
+}
+
+/// What `bus.clock` accepts.
+const CLOCK_HELP: &str = "write \"83.33kHz\" (the thesis's board), \"100kHz\", \"400kHz\" or \
+     \"1MHz\", or any clock from 1 kHz to 1 MHz in Hz, kHz or MHz (\"100000Hz\", \"0.4MHz\")";
+
+/// Parses a bus clock: "83.33kHz", "100kHz", "400kHz", "1MHz", or any "N Hz" / "N kHz" /
+/// "N MHz" from 1 kHz to 1 MHz.
+fn clock(text: &str) -> Result<BusClock, RobotError> {
+    let t = text.trim().to_ascii_lowercase().replace(' ', "");
+    let hz = if t == "83.33khz" || t == "83.333khz" {
+        return Ok(BusClock::THESIS);
+    } else if let Some(m) = t.strip_suffix("mhz") {
+        m.parse::<f64>().ok().map(|m| m * 1e6)
+    } else if let Some(k) = t.strip_suffix("khz") {
+        k.parse::<f64>().ok().map(|k| k * 1e3)
+    } else if let Some(h) = t.strip_suffix("hz") {
+        h.parse::<f64>().ok()
+    } else {
+        None
+    };
+    match hz {
+        Some(hz) if (1_000.0..=1_000_000.0).contains(&hz) => {
+            Ok(BusClock::from_hz(hz.round() as u32))
+        }
+        _ => Err(RobotError::field(
+            "bus.clock",
+            format!("{text:?}: {CLOCK_HELP}"),
+        )),
+    }
+}
+
+/// A duration that must be given (not "off").
+fn delay(field: &str, text: &str) -> Result<Duration, RobotError> {
+    duration(field, text)?
+        .ok_or_else(|| RobotError::field(field, "\"off\": give a duration such as \"15ms\""))
+}
+
+/// A limit that is either "off" or longer than zero: zero would act at once, every time.
+fn limit(field: &str, text: &str, zero_means: &str) -> Result<Option<Duration>, RobotError> {
+    let d = duration(field, text)?;
+    if d == Some(Duration::ZERO) {
+        return Err(RobotError::field(
+            field,
+            format!("{text:?} {zero_means}; give a longer time, or \"off\" for no limit"),
+        ));
+    }
+    Ok(d)
+}
+
+/// Parses "10s", "60ms", "2min", "1500us" or "off".
+fn duration(field: &str, text: &str) -> Result<Option<Duration>, RobotError> {
+    let t = text.trim();
+    if t == "off" {
+        return Ok(None);
+    }
+    let split = t
+        .find(|c: char| !c.is_ascii_digit() && c != '.')
+        .unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let scale = match unit.trim() {
+        "us" | "µs" => 1.0,
+        "ms" => 1e3,
+        "s" => 1e6,
+        "min" => 60e6,
+        _ => {
+            return Err(RobotError::field(
+                field,
+                format!(
+                    "{text:?}: write a duration like \"60ms\", \"10s\" or \"2min\", or \"off\""
+                ),
+            ))
+        }
+    };
+    let value: f64 = number
+        .parse()
+        .map_err(|_| RobotError::field(field, format!("{text:?}: {number:?} is not a number")))?;
+    let micros = value * scale;
+    if !(0.0..=orch_core::MAX_LIMIT.as_micros() as f64).contains(&micros) {
+        return Err(RobotError::field(
+            field,
+            format!("{text:?}: must be between 0 and 30min"),
+        ));
+    }
+    Ok(Some(Duration::from_micros(micros.round() as u32)))
+}
+
+/// Reads `[guard]`.
+fn guard(g: &Guard) -> Result<GuardConfig, RobotError> {
+    if g.max_keys_down == 0 {
+        return Err(RobotError::field(
+            "guard.max_keys_down",
+            "0: no key could ever play; the most keys down at once is 1..=255",
+        ));
+    }
+    let max_keys_down = int(
+        "guard.max_keys_down",
+        g.max_keys_down,
+        1,
+        u8::MAX,
+        "the most keys down at once",
+    )?;
+    let max_hold = limit(
+        "guard.max_hold",
+        &g.max_hold,
+        "would release every key the moment it goes down, so no note could sound",
+    )?;
+    let watchdog = limit(
+        "guard.watchdog",
+        &g.watchdog,
+        "would release every key at once, before the next byte could arrive",
+    )?;
+    let restrike_gap = duration("guard.restrike_gap", &g.restrike_gap)?.unwrap_or(Duration::ZERO);
+    let min_press = duration("guard.min_press", &g.min_press)?.unwrap_or(Duration::ZERO);
+    if let Some(hold) = max_hold {
+        if min_press > hold {
+            return Err(RobotError::field(
+                "guard.min_press",
+                format!(
+                    "{:?} is longer than guard.max_hold = {:?}: a key held for its shortest \
+                     strike would be cut by the hold limit; make min_press shorter or max_hold \
+                     longer",
+                    g.min_press, g.max_hold
+                ),
+            ));
+        }
+    }
+    let late_limit = duration("guard.late_limit", &g.late_limit)?;
+    let duty = match (
+        duration("guard.duty_window", &g.duty_window)?,
+        duration("guard.duty_max_on", &g.duty_max_on)?,
+    ) {
+        (Some(window), Some(max_on)) => {
+            if max_on == Duration::ZERO || max_on > window || max_on > orch_core::DutyLimit::MAX_ON
+            {
+                return Err(RobotError::field(
+                    "guard.duty_max_on",
+                    format!(
+                        "{:?}: must be above 0, at most guard.duty_window ({:?}) and at most \
+                         60s, or \"off\"",
+                        g.duty_max_on, g.duty_window
+                    ),
+                ));
+            }
+            Some(orch_core::DutyLimit { window, max_on })
+        }
+        _ => None,
+    };
+    Ok(GuardConfig {
+        enabled: g.enabled,
+        max_hold,
+        max_keys_down,
+        restrike_gap,
+        min_press,
+        watchdog,
+        late_limit,
+        duty,
+    })
+}
+
+/// Reads `[[boards]]`, or the thesis's four boards if there are none.
+fn boards(list: Option<&[Board]>) -> Result<(Layout<MAX_BOARDS>, usize), RobotError> {
+    const THESIS: [Board; 4] = [
+        Board {
+            address: 0x21,
+            keys: 16,
+            first_bit: 0,
+        },
+        Board {
+            address: 0x22,
+            keys: 16,
+            first_bit: 0,
+        },
+        Board {
+            address: 0x23,
+            keys: 16,
+            first_bit: 0,
+        },
+        Board {
+            address: 0x24,
+            keys: 13,
+            first_bit: 0,
+        },
+    ];
+    let boards = list.unwrap_or(&THESIS);
+    if boards.is_empty() || boards.len() > MAX_BOARDS {
+        return Err(RobotError::field(
+            "boards",
+            format!("{} boards; orch drives 1 to {MAX_BOARDS}", boards.len()),
+        ));
+    }
+    let mut spans = [BoardSpan {
+        address: 0,
+        keys: 0,
+        first_bit: 0,
+    }; MAX_BOARDS];
+    for (i, b) in boards.iter().enumerate() {
+        let field = |name: &str| format!("boards[{i}].{name}");
+        if !(0x08..=0x77).contains(&b.address) {
+            return Err(RobotError::field(
+                field("address"),
+                format!(
+                    "{:#04x} is not a 7-bit I2C device address (0x08..=0x77)",
+                    b.address
+                ),
+            ));
+        }
+        if let Some(j) = boards[..i].iter().position(|o| o.address == b.address) {
+            return Err(RobotError::field(
+                field("address"),
+                format!("{:#04x} is used twice (also boards[{j}])", b.address),
+            ));
+        }
+        let keys = int(
+            &field("keys"),
+            b.keys,
+            1,
+            16,
+            "the number of keys on one board",
+        )?;
+        let first_bit = int(&field("first_bit"), b.first_bit, 0, 15, "an output bit")?;
+        if first_bit + keys > 16 {
+            return Err(RobotError::field(
+                format!("boards[{i}]"),
+                format!("first_bit {first_bit} + keys {keys} runs past output bit 15"),
+            ));
+        }
+        spans[i] = BoardSpan {
+            address: b.address as u8,
+            keys,
+            first_bit,
+        };
+    }
+    Ok((Layout { boards: spans }, boards.len()))
+}
+
+impl File {
+    fn into_robot(self) -> Result<Robot, RobotError> {
+        let k = &self.keys;
+        let low = Note::new(int("keys.low", k.low, 0, 127, "a MIDI note")?).expect("0..=127");
+        let high = Note::new(int("keys.high", k.high, 0, 127, "a MIDI note")?).expect("0..=127");
+        let range = KeyRange::new(low, high).ok_or_else(|| {
+            RobotError::field(
+                "keys.low",
+                format!("{} is above keys.high = {}", k.low, k.high),
+            )
+        })?;
+        let channels = channels(&k.channels)?;
+        let (layout, boards) = boards(self.boards.as_deref())?;
+        if layout.keys() != range.keys() {
+            return Err(RobotError::field(
+                "boards",
+                format!(
+                    "the boards drive {} keys in all, but keys.low..=keys.high has {}",
+                    layout.keys(),
+                    range.keys()
+                ),
+            ));
+        }
+        let config = Config {
+            channels,
+            range,
+            out_of_range: match k.out_of_range {
+                Policy::Fold => OutOfRange::Fold,
+                Policy::Drop => OutOfRange::Drop,
+            },
+            layout,
+            sustain: k.sustain,
+            overlap: match k.overlap {
+                OverlapWord::Hold => orch_core::Overlap::Hold,
+                OverlapWord::Restrike => orch_core::Overlap::Restrike,
+            },
+            guard: guard(&self.guard)?,
+        };
+        config.validate(MAX_KEYS).map_err(config_error)?;
+        Ok(Robot {
+            config,
+            boards,
+            clock: clock(&self.bus.clock)?,
+            mechanics: mechanics(&self.mechanics, range)?,
+        })
+    }
+}
+
+/// Reads `[mechanics]` and its `[[mechanics.key]]` entries, one at most per note.
+fn mechanics(m: &Mechanics, range: KeyRange) -> Result<MechanicsConfig, RobotError> {
+    let default = KeyMechanics {
+        press_delay: delay("mechanics.press_delay", &m.press_delay)?,
+        release_delay: delay("mechanics.release_delay", &m.release_delay)?,
+        min_hold: delay("mechanics.min_hold", &m.min_hold)?,
+    };
+    let (low, high) = (range.low().get(), range.high().get());
+    let mut mechanics = MechanicsConfig::uniform(default);
+    for (i, k) in m.key.iter().enumerate() {
+        let field = |name: &str| format!("mechanics.key[{i}].{name}");
+        if !(i64::from(low)..=i64::from(high)).contains(&k.note) {
+            return Err(RobotError::field(
+                field("note"),
+                format!(
+                    "{} is out of range: the robot has keys for notes {low}..={high} only",
+                    k.note
+                ),
+            ));
+        }
+        if let Some(j) = m.key[..i].iter().position(|o| o.note == k.note) {
+            return Err(RobotError::field(
+                field("note"),
+                format!(
+                    "note {} is already given in mechanics.key[{j}]; list each key once",
+                    k.note
+                ),
+            ));
+        }
+        let mut figures = default;
+        if let Some(t) = &k.press_delay {
+            figures.press_delay = delay(&field("press_delay"), t)?;
+        }
+        if let Some(t) = &k.release_delay {
+            figures.release_delay = delay(&field("release_delay"), t)?;
+        }
+        if let Some(t) = &k.min_hold {
+            figures.min_hold = delay(&field("min_hold"), t)?;
+        }
+        mechanics = mechanics.with_key(k.note as u8 - low, figures);
+    }
+    Ok(mechanics)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_toml_is_the_thesis_robot() {
+        let r = Robot::thesis();
+        let t = Config::THESIS;
+        assert_eq!(r.boards, 4);
+        assert_eq!(r.config.range, t.range);
+        assert_eq!(r.config.guard, t.guard);
+        assert_eq!(r.config.channels, t.channels);
+        assert_eq!(&r.config.layout.boards[..4], &t.layout.boards[..]);
+        assert_eq!(Robot::from_toml("").unwrap().config, r.config);
+        assert_eq!(r.clock, BusClock::FAST);
+        assert_eq!(r.mechanics, MechanicsConfig::default());
+    }
+
+    #[test]
+    fn bad_fields_are_named() {
+        let e = Robot::from_toml("[guard]\nmax_hold = \"ten\"").unwrap_err();
+        assert_eq!(e.field_name(), Some("guard.max_hold"));
+        let e = format!(
+            "{:#}",
+            Robot::from_toml("[guard]\nmax_hold = \"ten\"").unwrap_err()
+        );
+        assert!(e.contains("guard.max_hold"), "{e}");
+        let e = format!("{:#}", Robot::from_toml("[keys]\nlow = 200").unwrap_err());
+        assert!(e.contains("keys.low"), "{e}");
+        let e = format!(
+            "{:#}",
+            Robot::from_toml("[guard]\nmax_hld = \"1s\"").unwrap_err()
+        );
+        assert!(e.contains("max_hld"), "{e}");
+        let e = format!(
+            "{:#}",
+            Robot::from_toml("[[boards]]\naddress = 0x21\nkeys = 16").unwrap_err()
+        );
+        assert!(e.contains("boards drive 16 keys"), "{e}");
+    }
+
+    #[test]
+    fn bus_clock_and_per_key_mechanics_are_read() {
+        let r = Robot::from_toml(
+            "[bus]\nclock = \"83.33kHz\"\n[mechanics]\npress_delay = \"10ms\"\n[[mechanics.key]]\nnote = 60\nrelease_delay = \"40ms\"\n",
+        )
+        .unwrap();
+        assert_eq!(r.clock, BusClock::THESIS);
+        assert_eq!(
+            r.mechanics.for_key(0).press_delay,
+            Duration::from_millis(10)
+        );
+        assert_eq!(
+            r.mechanics.for_key(24).release_delay,
+            Duration::from_millis(40)
+        );
+        assert_eq!(
+            r.mechanics.for_key(24).press_delay,
+            Duration::from_millis(10)
+        );
+        let e = format!(
+            "{:#}",
+            Robot::from_toml("[[mechanics.key]]\nnote = 20").unwrap_err()
+        );
+        assert!(e.contains("mechanics.key[0].note"), "{e}");
+        let e = format!(
+            "{:#}",
+            Robot::from_toml("[bus]\nclock = \"fast\"").unwrap_err()
+        );
+        assert!(e.contains("bus.clock"), "{e}");
+    }
+
+    #[test]
+    fn durations_parse_in_units_and_off() {
+        assert_eq!(
+            duration("f", "60ms").unwrap(),
+            Some(Duration::from_millis(60))
+        );
+        assert_eq!(
+            duration("f", "1.5s").unwrap(),
+            Some(Duration::from_millis(1500))
+        );
+        assert_eq!(duration("f", "off").unwrap(), None);
+        assert!(duration("f", "31min").is_err());
+    }
+}

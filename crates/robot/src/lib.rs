@@ -1,0 +1,172 @@
+//! `robot.toml`: the configuration of one solenoid robot, read and checked.
+//!
+//! orch's core ([`orch_core`]) and virtual robot ([`orch_sim`]) take plain settings: a
+//! [`Config`], a [`BusClock`], a [`MechanicsConfig`]. This crate is where those settings come
+//! from on a host: a commented TOML file (see [`DEFAULT_TOML`], which `orch config` prints)
+//! with the robot's key range, channels, finger boards, bus clock, key mechanics and safety
+//! guard. Every field is optional. A file that cannot be used is refused with a
+//! [`RobotError`] that names the field and says what to write instead; a configuration that
+//! is accepted always builds an interpreter.
+//!
+//! ```
+//! use orch_robot::Robot;
+//!
+//! let robot = Robot::from_toml("[guard]\nmax_hold = \"5s\"\n").unwrap();
+//! assert_eq!(robot.boards, 4);
+//! let e = Robot::from_toml("[guard]\nmax_hold = \"ten\"\n").unwrap_err();
+//! assert_eq!(e.field_name(), Some("guard.max_hold"));
+//! ```
+
+use std::path::Path;
+
+use orch_core::{Config, Interpreter};
+use orch_sim::{BusClock, MechanicsConfig, SimConfig};
+
+mod error;
+mod file;
+
+pub use error::RobotError;
+
+/// The most boards a host configuration may have.
+pub const MAX_BOARDS: usize = 16;
+/// The most keys a host configuration may have: one per MIDI note.
+pub const MAX_KEYS: usize = 128;
+
+/// The interpreter as the host runs it: room for any configuration.
+pub type HostInterpreter = Interpreter<MAX_BOARDS, MAX_KEYS>;
+
+/// A robot: the interpreter's configuration, how many of the boards are real, the bus clock
+/// and the keys' mechanics.
+#[derive(Clone, Debug)]
+pub struct Robot {
+    /// The interpreter's configuration; only the first [`boards`](Self::boards) entries of
+    /// its layout are used.
+    pub config: Config<MAX_BOARDS>,
+    /// How many finger boards the robot has (1..=[`MAX_BOARDS`]).
+    pub boards: usize,
+    /// The I2C bus clock to the boards.
+    pub clock: BusClock,
+    /// How the keys move: press and release delays, shortest pulse that sounds.
+    pub mechanics: MechanicsConfig,
+}
+
+impl Robot {
+    /// The thesis's robot ([`DEFAULT_TOML`]).
+    pub fn thesis() -> Self {
+        Self::from_toml(DEFAULT_TOML).expect("the default configuration is valid")
+    }
+
+    /// Reads a configuration file. Errors in it are [`RobotError::InFile`], naming the file.
+    pub fn load(path: &Path) -> Result<Self, RobotError> {
+        let text = std::fs::read_to_string(path).map_err(|source| RobotError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_toml(&text).map_err(|error| RobotError::InFile {
+            path: path.to_path_buf(),
+            error: Box::new(error),
+        })
+    }
+
+    /// Parses and checks a configuration.
+    pub fn from_toml(text: &str) -> Result<Self, RobotError> {
+        file::parse(text)
+    }
+
+    /// The virtual robot's configuration.
+    pub fn sim_config(&self) -> SimConfig {
+        SimConfig {
+            clock: self.clock,
+            boards: self.config.layout.boards[..self.boards].to_vec(),
+            mechanics: self.mechanics.clone(),
+            keep: orch_sim::Keep::Everything,
+        }
+    }
+
+    /// The time one board write takes on the bus, in µs: START, 4 bytes of 9 bits, STOP.
+    pub fn write_micros(&self) -> f64 {
+        self.clock.nanos_for_bits(38) as f64 / 1000.0
+    }
+
+    /// An interpreter for this robot.
+    ///
+    /// A robot read by [`Robot::from_toml`] always has one; a robot whose fields were changed
+    /// afterwards may not.
+    pub fn interpreter(&self) -> Result<HostInterpreter, RobotError> {
+        HostInterpreter::new(self.config).map_err(file::config_error)
+    }
+}
+
+/// The default configuration: the thesis's robot with orch's safety guard.
+pub const DEFAULT_TOML: &str = r#"# orch robot configuration (robot.toml)
+# Every field is optional; a missing one takes the value shown here.
+
+[keys]
+# The notes the robot has keys for, as MIDI note numbers (60 is middle C).
+low = 36                  # C2
+high = 96                 # C7: 61 keys
+# Notes outside low..=high: "fold" moves them by octaves into range; "drop" skips them.
+out_of_range = "fold"
+# Channels listened to, as people count them (1..=16), or "all".
+channels = "all"
+# Let the sustain pedal (CC 64) hold released keys down. Off by default: a held solenoid heats up.
+sustain = false
+# A second note on a key that is down (the same note on another channel, a note folded onto
+# it, or the same note again): "restrike" lifts the key, rests and strikes again (the
+# sequencer releases early so it lands on time); "hold" keeps it down for both, and the new
+# note makes no sound of its own. Restrike by default: the ear follows onsets.
+overlap = "restrike"
+
+# The finger boards (PCA9555 or TCA9555), in key order: each drives `keys` consecutive keys
+# (1 to 16) from output bit `first_bit` (bits 0-7 are port 0, 8-15 port 1).
+[[boards]]
+address = 0x21
+keys = 16
+first_bit = 0
+
+[[boards]]
+address = 0x22
+keys = 16
+first_bit = 0
+
+[[boards]]
+address = 0x23
+keys = 16
+first_bit = 0
+
+[[boards]]
+address = 0x24
+keys = 13
+first_bit = 0
+
+# The I2C bus to the boards: "83.33kHz" (the thesis's board), "100kHz", "400kHz" or "1MHz"
+# (any clock from 1 kHz to 1 MHz, written in Hz, kHz or MHz).
+# The PCA9555 and TCA9555 are rated for 400 kHz: a board write then takes 95 us, not 456 us.
+[bus]
+clock = "400kHz"
+
+# How the keys move, for the virtual robot and for latency compensation. press_delay: from
+# the solenoid's power to the key sounding; release_delay: from power off until the key is
+# fully up; min_hold: the shortest pulse that sounds. Keys that differ are listed by note,
+# each note once.
+[mechanics]
+press_delay = "15ms"
+release_delay = "25ms"
+min_hold = "8ms"
+# [[mechanics.key]]
+# note = 36
+# press_delay = "20ms"
+
+# The safety guard. Durations are written like "10s", "60ms" or "2min"; "off" means no limit.
+# max_hold and watchdog are "off" or longer than 0; min_press is at most max_hold.
+[guard]
+enabled = true
+max_hold = "10s"          # the longest a key may stay down (more than 0)
+max_keys_down = 16        # the power budget: a new note past it is refused
+restrike_gap = "60ms"     # the shortest rest before a key strikes again
+min_press = "20ms"        # how long a delayed re-strike is held if its note ended while it waited
+watchdog = "4s"           # release every key after this long without a byte (more than 0)
+late_limit = "30ms"       # a re-strike that would sound later than this is dropped (too fast)
+duty_window = "60s"       # the duty limit: a key may be energised at most duty_max_on
+duty_max_on = "30s"       #   in any duty_window ("off": no duty limit)
+"#;

@@ -1,0 +1,162 @@
+//! Configurations that cannot work are refused, and the message names the field and says
+//! what to write instead.
+
+use orch_robot::{Robot, RobotError};
+use orch_sim::BusClock;
+
+fn refused(text: &str) -> RobotError {
+    match Robot::from_toml(text) {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e,
+    }
+}
+
+/// Refused, naming `field`, with every one of `words` in the message.
+fn refused_naming(text: &str, field: &str, words: &[&str]) {
+    let e = refused(text);
+    assert_eq!(e.field_name(), Some(field), "{e}");
+    let message = e.to_string();
+    assert!(message.starts_with(field), "{message}");
+    for w in words {
+        assert!(message.contains(w), "{message:?} does not say {w:?}");
+    }
+}
+
+#[test]
+fn a_zero_watchdog_is_refused() {
+    refused_naming(
+        "[guard]\nwatchdog = \"0s\"\n",
+        "guard.watchdog",
+        &["\"0s\"", "\"off\""],
+    );
+    // "off" and any time longer than zero are fine.
+    assert!(Robot::from_toml("[guard]\nwatchdog = \"off\"\n").is_ok());
+    assert!(Robot::from_toml("[guard]\nwatchdog = \"1ms\"\n").is_ok());
+}
+
+#[test]
+fn a_zero_max_hold_is_refused_since_no_note_could_sound() {
+    refused_naming(
+        "[guard]\nmax_hold = \"0ms\"\nmin_press = \"0ms\"\n",
+        "guard.max_hold",
+        &["\"0ms\"", "no note could sound"],
+    );
+    assert!(Robot::from_toml("[guard]\nmax_hold = \"off\"\n").is_ok());
+}
+
+#[test]
+fn min_press_longer_than_max_hold_is_refused() {
+    refused_naming(
+        "[guard]\nmax_hold = \"10ms\"\nmin_press = \"20ms\"\n",
+        "guard.min_press",
+        &["\"20ms\"", "guard.max_hold", "\"10ms\""],
+    );
+    // Equal is fine (the strike is held exactly to the limit), and so is no hold limit.
+    assert!(Robot::from_toml("[guard]\nmax_hold = \"20ms\"\nmin_press = \"20ms\"\n").is_ok());
+    assert!(Robot::from_toml("[guard]\nmax_hold = \"off\"\nmin_press = \"20min\"\n").is_ok());
+}
+
+#[test]
+fn a_key_listed_twice_in_mechanics_is_refused() {
+    refused_naming(
+        "[[mechanics.key]]\nnote = 40\npress_delay = \"10ms\"\n\
+         [[mechanics.key]]\nnote = 41\n\
+         [[mechanics.key]]\nnote = 40\npress_delay = \"30ms\"\n",
+        "mechanics.key[2].note",
+        &["40", "mechanics.key[0]"],
+    );
+}
+
+#[test]
+fn a_board_with_no_keys_is_refused() {
+    refused_naming(
+        "[keys]\nlow = 36\nhigh = 51\n\
+         [[boards]]\naddress = 0x20\nkeys = 0\n\
+         [[boards]]\naddress = 0x21\nkeys = 16\n",
+        "boards[0].keys",
+        &["0", "1..=16"],
+    );
+}
+
+#[test]
+fn channels_given_badly_say_what_to_write() {
+    for (text, field) in [
+        ("channels = \"some\"", "keys.channels"),
+        ("channels = 3", "keys.channels"),
+        ("channels = []", "keys.channels"),
+        ("channels = [1, 0]", "keys.channels[1]"),
+        ("channels = [17]", "keys.channels[0]"),
+        ("channels = [\"1\"]", "keys.channels[0]"),
+    ] {
+        let e = refused(&format!("[keys]\n{text}\n"));
+        let message = e.to_string();
+        assert_eq!(e.field_name(), Some(field), "{message}");
+        assert!(!message.contains("untagged"), "{message}");
+        assert!(message.contains("\"all\""), "{message}");
+        assert!(message.contains("1..=16"), "{message}");
+    }
+    let r = Robot::from_toml("[keys]\nchannels = [1, 10, 16]\n").unwrap();
+    assert_eq!(r.config.channels.0, 1 | 1 << 9 | 1 << 15);
+}
+
+#[test]
+fn integers_out_of_range_name_the_field_and_the_range() {
+    for (text, field, range) in [
+        ("[keys]\nlow = 200", "keys.low", "0..=127"),
+        ("[keys]\nhigh = -1", "keys.high", "0..=127"),
+        (
+            "[guard]\nmax_keys_down = 300",
+            "guard.max_keys_down",
+            "1..=255",
+        ),
+        (
+            "[[boards]]\naddress = 0x21\nkeys = 300",
+            "boards[0].keys",
+            "1..=16",
+        ),
+        (
+            "[[boards]]\naddress = 0x21\nkeys = 1\nfirst_bit = 256",
+            "boards[0].first_bit",
+            "0..=15",
+        ),
+        (
+            "[[boards]]\naddress = 4096\nkeys = 1",
+            "boards[0].address",
+            "0x08..=0x77",
+        ),
+        (
+            "[[mechanics.key]]\nnote = 300",
+            "mechanics.key[0].note",
+            "36..=96",
+        ),
+    ] {
+        let e = refused(text);
+        let message = e.to_string();
+        assert_eq!(e.field_name(), Some(field), "{message}");
+        assert!(message.contains(range), "{message:?} does not give {range}");
+        assert!(!message.contains("expected u8"), "{message}");
+    }
+}
+
+#[test]
+fn bus_clock_is_read_in_hz_khz_and_mhz() {
+    let clock = |text: &str| {
+        Robot::from_toml(&format!("[bus]\nclock = \"{text}\"\n"))
+            .unwrap_or_else(|e| panic!("{text}: {e}"))
+            .clock
+    };
+    assert_eq!(clock("1MHz"), BusClock::from_hz(1_000_000));
+    assert_eq!(clock("1MHz"), clock("1000kHz"));
+    assert_eq!(clock("1MHz"), clock("1000000Hz"));
+    assert_eq!(clock("100000Hz"), clock("100kHz"));
+    assert_eq!(clock("0.4MHz"), BusClock::FAST);
+    assert_eq!(clock("83.33kHz"), BusClock::THESIS);
+    for bad in ["2MHz", "fast", "400", "0.5kHz"] {
+        let e = refused(&format!("[bus]\nclock = \"{bad}\"\n"));
+        let message = e.to_string();
+        assert_eq!(e.field_name(), Some("bus.clock"), "{message}");
+        for accepted in ["\"83.33kHz\"", "\"400kHz\"", "\"1MHz\"", "Hz, kHz or MHz"] {
+            assert!(message.contains(accepted), "{message:?} lacks {accepted}");
+        }
+    }
+}
