@@ -194,9 +194,15 @@ fn play_live(song: Song, setup: &Setup, args: &PlayArgs) -> anyhow::Result<Playe
         }
     }
     drop(view);
-    let (_raised, played) = sender
+    let (priority, played) = sender
         .join()
         .map_err(|_| anyhow::anyhow!("the sender thread panicked"))?;
+    if priority != realtime::Priority::Realtime {
+        eprintln!(
+            "orch: note: the OS refused real-time priority to the sender ({priority:?}); \
+             under load its messages may be late (see lateness in the report)"
+        );
+    }
     if let Some(e) = view_error {
         return Err(e.into());
     }

@@ -54,17 +54,45 @@ impl Clock for PreciseClock {
     }
 }
 
-/// Asks the OS to run the current thread at real-time priority. Returns whether it did
-/// (an unprivileged process on Linux usually may not; orch then plays at normal priority).
-pub fn raise_priority() -> bool {
-    thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Max).is_ok()
+/// The priority [`raise_priority`] obtained.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Priority {
+    /// A real-time scheduling policy (Linux: `SCHED_FIFO` at its highest priority): the
+    /// sender runs before every ordinary process.
+    Realtime,
+    /// The highest priority of the thread's ordinary policy (a lower nice value).
+    Raised,
+    /// The OS refused both (an unprivileged process usually may not): normal priority.
+    Normal,
+}
+
+/// Asks the OS to run the current thread at real-time priority: `SCHED_FIFO` where the OS
+/// has it and allows it (root, or `CAP_SYS_NICE`, or an `rtprio` limit), else the highest
+/// priority of its ordinary policy.
+pub fn raise_priority() -> Priority {
+    #[cfg(unix)]
+    {
+        use thread_priority::{
+            set_thread_priority_and_policy, thread_native_id, RealtimeThreadSchedulePolicy,
+            ThreadPriority, ThreadSchedulePolicy,
+        };
+        let fifo = ThreadSchedulePolicy::Realtime(RealtimeThreadSchedulePolicy::Fifo);
+        if set_thread_priority_and_policy(thread_native_id(), ThreadPriority::Max, fifo).is_ok() {
+            return Priority::Realtime;
+        }
+    }
+    if thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Max).is_ok() {
+        Priority::Raised
+    } else {
+        Priority::Normal
+    }
 }
 
 /// Runs `f` on a thread of its own at real-time priority where the OS allows it. The
-/// handle's result says whether the priority was raised, with `f`'s result.
+/// handle's result says which priority it got, with `f`'s result.
 pub fn spawn<T: Send + 'static>(
     f: impl FnOnce() -> T + Send + 'static,
-) -> std::thread::JoinHandle<(bool, T)> {
+) -> std::thread::JoinHandle<(Priority, T)> {
     std::thread::Builder::new()
         .name("orch-sender".into())
         .spawn(move || {
