@@ -85,6 +85,31 @@ awk -v a="$play_ms" -v s="$(field seconds "$TMP/play.out")" 'BEGIN {
     if (s > 0) printf "  orch renders %.0f s of music in %.0f ms: %.0fx real time\n", s, a, s * 1000 / a }'
 echo "  (wall ms: best run, from process start to exit, read around /usr/bin/time)"
 
+step "memory at the limits: a 50 MB valid file and a 37-byte file holding one note for 0x0FFFFFFF ticks"
+python3 - "$TMP" <<'PY'
+import random, struct, sys
+d = sys.argv[1]
+random.seed(1)
+ev = bytearray()
+first = True
+while len(ev) < 50 * 1024 * 1024 - 100:
+    note = 36 + random.randrange(61)
+    ev += bytes([6]) + (bytes([0x90]) if first else b"") + bytes([note, 100])
+    first = False
+    ev += bytes([5, note, 0])
+ev += bytes([0, 0xFF, 0x2F, 0])
+open(f"{d}/big50.mid", "wb").write(b"MThd" + struct.pack(">IHHH", 6, 0, 1, 480) + b"MTrk" + struct.pack(">I", len(ev)) + ev)
+trk = bytes([0, 0x90, 60, 100, 0xFF, 0xFF, 0xFF, 0x7F, 0x80, 60, 0, 0, 0xFF, 0x2F, 0])
+open(f"{d}/long.mid", "wb").write(b"MThd" + struct.pack(">IHHH", 6, 0, 1, 480) + b"MTrk" + struct.pack(">I", len(trk)) + trk)
+PY
+for f in big50 long; do
+    /usr/bin/time -f "%e %M" -o "$TMP/$f.time" "$ORCH" play --fast --json "$TMP/$f.mid" >"$TMP/$f.json"
+    read -r e m <"$TMP/$f.time"
+    size=$(stat -c %s "$TMP/$f.mid")
+    awk -v f="$f" -v s="$size" -v e="$e" -v m="$m" -v n="$(field notes "$TMP/$f.json")" 'BEGIN {
+        printf "  %-6s %10d bytes, %8d notes: %6.2f s, peak RSS %8d KiB = %.1fx the file\n", f, s, n, e, m, m * 1024 / s }'
+done
+
 PIECE=examples/ode-to-joy.mid
 [ -f "$PIECE" ] || PIECE=$MIDI_DIR/m21-test06.mid
 
