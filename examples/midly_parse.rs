@@ -1,7 +1,7 @@
 //! The baseline for `scripts/bench-play.sh`: reads a Standard MIDI File with midly alone and
 //! walks every event of every track, doing the least a player must (reading each event and
 //! adding up its delta time), and nothing orch does (no strict framing, tempo map, merge,
-//! schedule, interpreter or virtual robot).
+//! planner, interpreter or virtual robot).
 //!
 //! ```sh
 //! cargo run --release --example midly_parse -- FILE

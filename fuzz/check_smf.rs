@@ -15,18 +15,17 @@
 //!   `notes()` is the number of Note-Ons (0x9n) with velocity above 0; every event is a
 //!   whole message, status byte first (channel messages of their proper length with data
 //!   bytes below 0x80, SysEx `F0 … F7`); the tempo map starts at tick 0 and moves forward;
-//! - `schedule` without compensation sends every event at its (scaled) score time, in the
-//!   song's order;
-//! - `schedule` with `Compensation::uniform(..)` and a re-strike gap: every event is sent
-//!   exactly once, sends are in time order, one key's messages keep their score order, a
-//!   press after a release of its key comes at least the re-strike gap later, and sends
-//!   never precede 0;
-//! - playing the schedule on a `VirtualClock` sends every entry, on time, and its
-//!   running-status wire bytes expand back to the same messages.
+//! - the performer's streaming planner (`orch_perform::Planner`), with uniform leads, a
+//!   re-strike gap, a minimum press, a late limit, either overlap and a tempo factor from the
+//!   hash, sends exactly what planning the whole song first sends; every score message goes
+//!   out exactly once (a Note-On the planner drops is accounted as dropped), with its own
+//!   bytes; sends are in time order and never before the start; one key's score messages keep
+//!   their score order; what the planner adds are Note-Offs; with compensation off every
+//!   message goes at its score time, in the song's order.
 
-use orch_seq::{
-    schedule, Clock, Compensation, Event, RunningStatus, Song, TempoScale, VirtualClock,
-};
+use orch_core::{ChannelMask, KeyRange, Note, OutOfRange, Overlap};
+use orch_perform::{KeyMap, PlanRules, Planned, Planner, ScoreEvent, Tempo};
+use orch_seq::{Event, Song};
 
 /// Checks every invariant on one input. Panics on a violation.
 pub fn check(data: &[u8]) {
@@ -35,7 +34,7 @@ pub fn check(data: &[u8]) {
     };
     check_song(&song);
     let settings = Settings::from_input(data);
-    check_schedule(&song, &settings);
+    check_plan(&song, &settings);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -127,16 +126,18 @@ fn check_message(e: &Event) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The schedule
+// The plan
 
-/// The schedule's settings, from a hash of the input.
+/// The planner's settings, from a hash of the input.
 struct Settings {
     press_us: u64,
     release_us: u64,
     gap_us: u64,
     min_press_us: u64,
-    scale: TempoScale,
-    /// Fold notes into the 61 keys 36..=96 (several notes share a key), else one key a note.
+    late_limit_us: Option<u64>,
+    overlap: Overlap,
+    tempo: Tempo,
+    /// Fold notes into the 61 keys 36..=96 (several notes share a key), else drop the others.
     fold: bool,
     /// Channels mapped: bit c for channel c.
     channels: u16,
@@ -152,135 +153,187 @@ impl Settings {
         h ^= h >> 33;
         h = h.wrapping_mul(0xFF51_AFD7_ED55_8CCD);
         h ^= h >> 33;
-        let scales = [1.0, 1.0, 2.0, 0.5, 0.37, 3.0, 1e-3, 1e6];
+        let tempos = [1.0, 1.0, 2.0, 0.5, 0.37, 3.0, 0.05, 20.0];
         Self {
             press_us: (h & 0xFF) * 250,          // 0 to 64 ms
             release_us: ((h >> 8) & 0xFF) * 250, // 0 to 64 ms
             gap_us: ((h >> 16) & 0xFF) * 500,    // 0 to 128 ms
             min_press_us: ((h >> 24) & 0x3F) * 1_000,
-            scale: TempoScale::new(scales[((h >> 30) & 7) as usize]).expect("finite, above 0"),
+            tempo: Tempo::new(tempos[((h >> 30) & 7) as usize]).expect("finite, above 0"),
             fold: (h >> 33) & 1 == 1,
             channels: if (h >> 34) & 1 == 1 {
                 0xFFFF
             } else {
                 (h >> 35) as u16
             },
+            late_limit_us: ((h >> 51) & 1 == 1).then_some(((h >> 52) & 0x3F) * 1_000),
+            overlap: if (h >> 58) & 1 == 1 {
+                Overlap::Hold
+            } else {
+                Overlap::Restrike
+            },
         }
     }
 
-    fn key_of(&self, channel: u8, note: u8) -> Option<u16> {
-        if self.channels & (1 << (channel & 0x0F)) == 0 {
-            return None;
-        }
-        if self.fold {
-            let mut n = note;
-            while n < 36 {
-                n += 12;
-            }
-            while n > 96 {
-                n -= 12;
-            }
-            Some(u16::from(n - 36))
-        } else {
-            Some(u16::from(note))
+    fn rules(&self, compensation: bool) -> PlanRules {
+        PlanRules {
+            keys: KeyMap {
+                channels: ChannelMask(self.channels),
+                range: KeyRange::new(Note::from_bits(36), Note::from_bits(96)).expect("36..=96"),
+                out_of_range: if self.fold {
+                    OutOfRange::Fold
+                } else {
+                    OutOfRange::Drop
+                },
+            },
+            press_lead_us: vec![self.press_us; 61],
+            release_lead_us: vec![self.release_us; 61],
+            min_hold_us: vec![self.min_press_us / 2; 61],
+            restrike_gap_us: self.gap_us,
+            min_press_us: self.min_press_us,
+            late_limit_us: self.late_limit_us,
+            overlap: self.overlap,
+            compensation,
+            bus_margin_us: 0,
+            extra_lookahead_us: 0,
         }
     }
 }
 
-fn check_schedule(song: &Song, s: &Settings) {
+fn score(events: &[Event]) -> impl Iterator<Item = ScoreEvent> + '_ {
+    events.iter().map(|e| ScoreEvent {
+        score_us: e.time_us,
+        bytes: e.bytes.clone(),
+    })
+}
+
+fn check_plan(song: &Song, s: &Settings) {
     let events = song.events();
+    const START: i64 = 1_000;
 
     // No compensation: everything at its score time, in the song's order.
-    let plain = schedule(events, s.scale, None);
-    assert_eq!(plain.entries().len(), events.len());
-    assert_eq!(plain.lead_in_us(), 0);
-    for (i, entry) in plain.entries().iter().enumerate() {
-        assert_eq!(entry.event, i, "uncompensated schedule reordered the song");
-        assert_eq!(entry.send_us, entry.score_us, "uncompensated send moved");
-    }
-
-    let comp = Compensation::uniform(|ch, note| s.key_of(ch, note), s.press_us, s.release_us)
-        .restrike_gap_us(s.gap_us)
-        .min_press_us(s.min_press_us);
-    let plan = schedule(events, s.scale, Some(&comp));
-    let entries = plan.entries();
-    assert_eq!(
-        entries.len(),
-        events.len(),
-        "the schedule lost or added events"
-    );
-    let mut seen = vec![false; events.len()];
-    for e in entries {
-        assert!(!seen[e.event], "event {} scheduled twice", e.event);
-        seen[e.event] = true;
-        assert_eq!(e.bytes, events[e.event].bytes, "entry carries other bytes");
-    }
-    for pair in entries.windows(2) {
-        assert!(
-            pair[0].send_us <= pair[1].send_us,
-            "schedule not sorted by send time: {:?} then {:?}",
-            pair[0],
-            pair[1]
-        );
-    }
-
-    // Per key: score order kept, and the re-strike gap after each release.
-    let mut last: std::collections::BTreeMap<u16, (usize, bool, u64)> = Default::default();
-    for e in entries {
-        let Some(key) = e.key else { continue };
-        let press = e.bytes.note_on().is_some();
-        assert!(
-            press || e.bytes.note_off().is_some(),
-            "a keyed entry that is no note: {e:?}"
-        );
-        if let Some(&(prev_event, prev_press, prev_send)) = last.get(&key) {
-            assert!(
-                prev_event < e.event,
-                "key {key}: event {} sent after event {prev_event}, against the score",
-                e.event
-            );
-            if press && !prev_press {
-                assert!(
-                    e.send_us >= prev_send + s.gap_us,
-                    "key {key}: press at {} µs only {} µs after its release (gap {} µs)",
-                    e.send_us,
-                    e.send_us - prev_send,
-                    s.gap_us
-                );
-            }
-        }
-        last.insert(key, (e.event, press, e.send_us));
-    }
-
-    // Play it on the virtual clock: every entry goes, on time; the running-status bytes expand
-    // back to the messages.
-    let mut clock = VirtualClock::new();
-    let mut sent: Vec<(u64, Vec<u8>)> = Vec::new();
-    let lateness = plan.play(&mut clock, RunningStatus::On, |t, bytes| {
-        sent.push((t, bytes.to_vec()));
-    });
-    assert_eq!(sent.len(), entries.len(), "play skipped entries");
-    assert_eq!(lateness.max_us, 0, "the virtual clock was late");
-    assert_eq!(
-        clock.now_us(),
-        entries.last().map_or(0, |e| e.send_us),
-        "the virtual clock did not end at the last send"
-    );
-    let mut status: Option<u8> = None;
-    for ((t, bytes), e) in sent.iter().zip(entries) {
-        assert_eq!(*t, e.send_us, "sent at another time than scheduled");
-        let whole: Vec<u8> = match bytes.first() {
-            Some(&b) if b < 0x80 => {
-                let s = status.unwrap_or_else(|| panic!("running status with none in force"));
-                std::iter::once(s).chain(bytes.iter().copied()).collect()
-            }
-            _ => bytes.clone(),
+    let mut plain = Planner::new(score(events), s.rules(false), START, s.tempo);
+    let mut n = 0;
+    while let Some(p) = plain.next_planned() {
+        let Planned::Send { at_us, bytes, .. } = p else {
+            panic!("without compensation the planner dropped a note");
         };
-        match whole.first() {
-            Some(&b @ 0x80..=0xEF) => status = Some(b),
-            Some(0xF0..=0xF7) => status = None,
-            _ => {}
-        }
-        assert_eq!(&whole[..], &e.bytes[..], "wire bytes do not expand back");
+        let e = &events[n];
+        assert_eq!(bytes, e.bytes, "message {n} reordered without compensation");
+        assert_eq!(
+            at_us,
+            plain.wall(e.time_us),
+            "message {n} moved without compensation"
+        );
+        n += 1;
     }
+    assert_eq!(n, events.len(), "the plain plan lost or added messages");
+
+    // With compensation: streaming equals planning the whole song first.
+    let mut streaming = Planner::new(score(events), s.rules(true), START, s.tempo);
+    let mut whole = Planner::new(score(events), s.rules(true), START, s.tempo).eager();
+    let mut plan = Vec::new();
+    loop {
+        let (a, b) = (streaming.next_planned(), whole.next_planned());
+        assert_eq!(
+            a,
+            b,
+            "streaming and whole-song plans differ at send {}",
+            plan.len()
+        );
+        match a {
+            Some(p) => plan.push(p),
+            None => break,
+        }
+    }
+
+    // Every score message once: the plan's own messages, in each key's score order.
+    let keys = s.rules(true).keys;
+    let mut expected: std::collections::VecDeque<&Event> = Default::default();
+    let mut per_key: Vec<std::collections::VecDeque<&Event>> = vec![Default::default(); 61];
+    let key_of = |e: &Event| {
+        let (ch, n) = e
+            .bytes
+            .note_on()
+            .map(|(c, n, _)| (c, n))
+            .or(e.bytes.note_off())?;
+        keys.land(ch, n).map(|l| usize::from(l.key))
+    };
+    for e in events {
+        match key_of(e) {
+            Some(k) => per_key[k].push_back(e),
+            None => expected.push_back(e),
+        }
+    }
+    let mut last_at = i64::MIN;
+    let mut notes_seen = 0usize;
+    for p in &plan {
+        match p {
+            Planned::Send {
+                at_us,
+                bytes,
+                added,
+                ..
+            } => {
+                assert!(*at_us >= last_at, "sends out of time order at {at_us} µs");
+                assert!(*at_us >= 0, "a send before the start: {at_us} µs");
+                last_at = *at_us;
+                if *added {
+                    assert!(bytes.note_off().is_some(), "the planner added {bytes:?}");
+                    continue;
+                }
+                if bytes.note_on().is_some() {
+                    notes_seen += 1;
+                }
+                let e = Event {
+                    time_us: 0,
+                    tick: 0,
+                    track: 0,
+                    bytes: bytes.clone(),
+                };
+                match key_of(&e) {
+                    Some(k) => {
+                        let next = per_key[k]
+                            .pop_front()
+                            .unwrap_or_else(|| panic!("key {k}: a message the score lacks"));
+                        assert_eq!(&next.bytes, bytes, "key {k}: out of score order");
+                    }
+                    None => {
+                        // Unkeyed messages keep their bytes; their order among keyed ones may
+                        // differ, so find and take this one.
+                        let i = expected
+                            .iter()
+                            .position(|x| &x.bytes == bytes)
+                            .unwrap_or_else(|| panic!("a message the score lacks: {bytes:?}"));
+                        expected.remove(i);
+                    }
+                }
+            }
+            Planned::Dropped {
+                channel,
+                note_number,
+                ..
+            } => {
+                notes_seen += 1;
+                let k = keys
+                    .land(*channel, *note_number)
+                    .map(|l| usize::from(l.key))
+                    .expect("a dropped note has a key");
+                let next = per_key[k]
+                    .pop_front()
+                    .expect("the dropped note is the score's");
+                assert_eq!(next.bytes.note_on().map(|(_, n, _)| n), Some(*note_number));
+            }
+        }
+    }
+    assert!(
+        expected.is_empty(),
+        "{} unkeyed messages never sent",
+        expected.len()
+    );
+    assert!(
+        per_key.iter().all(|q| q.is_empty()),
+        "keyed messages never sent"
+    );
+    assert_eq!(notes_seen, song.notes(), "notes lost or added");
 }

@@ -1,8 +1,9 @@
-//! Fuzzes orch-seq's Standard MIDI File reader and the schedule built on it: `Song::parse` on
-//! any bytes never panics, and a song it accepts is in order, counts its notes right and
-//! schedules (with latency compensation and a re-strike gap) without reordering a key. The
-//! checks live in `../check_smf.rs`, which `crates/seq/tests/fuzz_replay.rs` also uses to
-//! replay the corpus and the regressions.
+//! Fuzzes orch-seq's Standard MIDI File reader and the performer's planner on it: `Song::parse`
+//! on any bytes never panics, and a song it accepts is in order, counts its notes right and
+//! plans (with latency compensation, a re-strike gap and a late limit) as a stream exactly as
+//! a whole, sending every message once without reordering a key. The checks live in
+//! `../check_smf.rs`, which `crates/perform/tests/fuzz_replay_smf.rs` also uses to replay the
+//! corpus and the regressions.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;

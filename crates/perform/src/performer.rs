@@ -445,6 +445,7 @@ where
                 note_number,
                 note,
                 reason,
+                ..
             } => {
                 ledger.score(note, channel, note_number, score_at_us);
                 ledger.dropped(note, reason);

@@ -150,6 +150,8 @@ pub enum Planned {
     },
     /// A score note the planner does not send.
     Dropped {
+        /// Its place among the sends: where its Note-On would have gone, wall µs.
+        at_us: i64,
         /// Its wall time in the score.
         score_at_us: i64,
         /// Its channel (0..=15).
@@ -168,7 +170,7 @@ impl Planned {
     pub fn at_us(&self) -> i64 {
         match self {
             Planned::Send { at_us, .. } => *at_us,
-            Planned::Dropped { score_at_us, .. } => *score_at_us,
+            Planned::Dropped { at_us, .. } => *at_us,
         }
     }
 }
@@ -193,6 +195,10 @@ struct KeyModel {
     released_at: Option<i64>,
     /// The queued message that lets the key go, and how early it may move.
     release: Option<((i64, u64), i64)>,
+    /// Messages of the key queued after that release that do nothing to it (Note-Offs of
+    /// notes no longer on, presses too fast to strike): they move with it, so the key's order
+    /// holds.
+    trailing: Vec<(i64, u64)>,
 }
 
 type QueueKey = (i64, u64);
@@ -299,9 +305,13 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
                     *at_us = n;
                     n
                 }
-                Planned::Dropped { score_at_us, .. } => {
-                    *score_at_us = self.map.wall(old.score(*score_at_us)).max(now_us);
-                    *score_at_us
+                Planned::Dropped {
+                    at_us, score_at_us, ..
+                } => {
+                    let n = shift(*at_us, *score_at_us);
+                    *score_at_us = self.map.wall(old.score(*score_at_us));
+                    *at_us = n;
+                    n
                 }
             };
             renamed.insert(seq, new_t);
@@ -321,6 +331,11 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
             k.release = k
                 .release
                 .and_then(|((_, seq), floor)| Some(((*renamed.get(&seq)?, seq), remap(floor))));
+            k.trailing = k
+                .trailing
+                .iter()
+                .filter_map(|&(_, seq)| Some((*renamed.get(&seq)?, seq)))
+                .collect();
             k.last_send = k.last_send.map(remap);
             k.released_at = k.released_at.map(remap);
             if let Some(st) = &mut k.strike {
@@ -563,39 +578,22 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
             m.strike = None;
             m.released_at = Some(r);
             m.release = None;
+            m.trailing.clear();
         } else if let Some((q, floor)) = model.release {
             // Rule 4: the release waiting in the queue moves earlier if the press needs it.
             if p_des - q.0 < gap {
                 let r = (p_des - gap).max(floor);
                 let strike_at = p_des.max(r + gap);
                 if r < q.0 && self.late_ok(strike_at - p_des) {
-                    if let Some(Planned::Send {
-                        bytes,
-                        note,
-                        score_at_us,
-                        added,
-                        ..
-                    }) = self.queue.remove(&q)
-                    {
-                        let nq = (r, q.1);
-                        self.queue.insert(
-                            nq,
-                            Planned::Send {
-                                at_us: r,
-                                bytes,
-                                note,
-                                score_at_us,
-                                added,
-                            },
-                        );
-                        let m = &mut self.keys[k];
-                        m.released_at = Some(r);
-                        m.release = Some((nq, floor));
-                        if m.last_send == Some(q.0) {
-                            m.last_send = Some(r);
-                        }
-                        self.stats.releases_moved_early += 1;
+                    let nq = self.move_to(q, r);
+                    for t in std::mem::take(&mut self.keys[k].trailing) {
+                        self.move_to(t, r);
                     }
+                    let m = &mut self.keys[k];
+                    m.released_at = Some(r);
+                    m.release = Some((nq, floor));
+                    m.last_send = Some(r);
+                    self.stats.releases_moved_early += 1;
                 }
             }
         }
@@ -623,6 +621,7 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
             late: strike_at > at,
         });
         m.release = None;
+        m.trailing.clear();
     }
 
     /// A press that cannot strike within the late limit. When the interpreter will see that
@@ -643,18 +642,26 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         bytes: WireBytes,
         id: NoteId,
     ) {
-        if at > p_des || !self.robot_drops(wait) {
+        let m = &self.keys[k];
+        let idle = m.holders.is_empty() && m.release.is_some();
+        let q = if at > p_des || !self.robot_drops(wait) {
             self.stats.dropped_too_fast += 1;
             self.push(Planned::Dropped {
+                at_us: at,
                 score_at_us: w,
                 channel: ch,
                 note_number: n,
                 note: id,
                 reason: DropReason::TooFast,
-            });
+            })
         } else {
-            self.send(at, bytes, Some(id), w);
+            let q = self.send(at, bytes, Some(id), w);
             self.mark(ch, k, at);
+            q
+        };
+        if idle {
+            // It follows the key's release in the key's order: if the release moves, it moves.
+            self.keys[k].trailing.push(q);
         }
     }
 
@@ -675,9 +682,13 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         }
         if !was_on || !m.holders.is_empty() {
             // No effect on the key: keep its place in the key's order.
+            let idle = m.holders.is_empty() && m.release.is_some();
             let at = self.after_controller(ch, r_des.max(last));
-            self.send(at, bytes, None, w);
+            let q = self.send(at, bytes, None, w);
             self.mark(ch, k, at);
+            if idle {
+                self.keys[k].trailing.push(q);
+            }
             return;
         }
         let min_press = self.rules.min_press_us as i64;
@@ -694,5 +705,18 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         m.strike = None;
         m.released_at = Some(at);
         m.release = Some((q, floor));
+        m.trailing.clear();
+    }
+
+    /// Moves the queued send `q` to wall time `t`; returns its new queue key.
+    fn move_to(&mut self, q: QueueKey, t: i64) -> QueueKey {
+        let nq = (t, q.1);
+        if let Some(mut p) = self.queue.remove(&q) {
+            match &mut p {
+                Planned::Send { at_us, .. } | Planned::Dropped { at_us, .. } => *at_us = t,
+            }
+            self.queue.insert(nq, p);
+        }
+        nq
     }
 }

@@ -1,4 +1,4 @@
-//! Clocks to play a schedule by: a virtual one for tests and rendering, a real one for robots.
+//! Clocks to play by: a virtual one for tests and rendering, a real one for robots.
 //!
 //! Both count microseconds from their own start and implement [`Clock`]. A clock's
 //! [`wait_until`](Clock::wait_until) returns how late it woke up, and the clock keeps those

@@ -1,8 +1,8 @@
 //! Guards that what the `smf` fuzzer learned stays learned: replays every input of
 //! `fuzz/corpus/smf/` (the seeds) and `fuzz/regressions/smf/` (crashes the fuzzer found)
 //! through the fuzz target's own checks, `fuzz/check_smf.rs`, on stable Rust, as part of
-//! `cargo test -p orch-seq`. Fails if the corpus is missing or thin, so it cannot pass by
-//! replaying nothing, and checks that the whole seeds parse (so the schedule checks run) and
+//! `cargo test -p orch-perform` (the checks run orch-seq's reader and this crate's planner). Fails if the corpus is missing or thin, so it cannot pass by
+//! replaying nothing, and checks that the whole seeds parse (so the plan checks run) and
 //! the damaged ones (`bad-*`, `cut-*`) are refused.
 
 #[path = "../../../fuzz/check_smf.rs"]
