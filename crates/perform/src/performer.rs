@@ -18,6 +18,10 @@ use crate::tempo::Tempo;
 /// 200 ms without a byte, so the robot's watchdog fires only when the sender is really gone.
 pub const KEEP_ALIVE_US: u64 = 200_000;
 
+/// The longest burst the performer plans for on a DIN line: a chord of 16 notes, every
+/// message with its status byte (15.4 ms).
+const DIN_BURST_US: u64 = 16 * 3 * Link::DIN_BYTE_US;
+
 /// How often a live performance tells where it stands (25 times a second).
 const SHOW_EVERY_US: u64 = 40_000;
 
@@ -63,11 +67,18 @@ impl Setup {
                 .map(|k| m.for_key(k as u8).release_delay.as_micros() as u64 + write)
                 .collect(),
             // The shortest press that sounds, plus the longest a write can queue on the bus
-            // behind the other boards' (the press may reach its pin later than the release).
+            // behind the other boards' (the press may reach its pin later than the release),
+            // plus, on a DIN line, the longest burst a chord makes (a burst is centred on its
+            // time, so a press can arrive half a burst later and its release half a burst
+            // earlier than planned).
             min_hold_us: (0..keys)
                 .map(|k| {
                     m.for_key(k as u8).min_hold.as_micros() as u64
                         + self.sim.boards.len() as u64 * self.write_us()
+                        + match self.link {
+                            Link::Direct => 0,
+                            Link::Din => DIN_BURST_US,
+                        }
                 })
                 .collect(),
             restrike_gap_us: if guard {
@@ -90,8 +101,7 @@ impl Setup {
             bus_margin_us: self.sim.boards.len() as u64 * self.write_us(),
             extra_lookahead_us: match self.link {
                 Link::Direct => 0,
-                // A chord of 16 notes on the line, every message with its status byte.
-                Link::Din => 16 * 3 * Link::DIN_BYTE_US,
+                Link::Din => DIN_BURST_US,
             },
         }
     }
@@ -452,9 +462,25 @@ where
             }
         }
     }
-    // A robot that interprets MIDI itself is told to let go of everything, on every channel.
+    // The song is over (or stopped). A key struck at its very end (a note with no Note-Off
+    // before the end of the file) is still let sound: the end comes its shortest sounding
+    // press after the last send. Then a robot that interprets MIDI itself is told to let go
+    // of everything, on every channel.
+    let settle = rules_min_hold(setup);
+    let wire_busy = match &out {
+        Out::Midi { wire, .. } => wire.free_at(),
+        Out::Virtual => 0,
+    };
+    let end_at = match stopped_at {
+        Some(t) => t.max(last_at),
+        None => {
+            let t = last_at.max(wire_busy) + settle;
+            clock.wait_until(t);
+            t
+        }
+    };
     if let Out::Midi { .. } = out {
-        let t = stopped_at.unwrap_or(last_at).max(last_at);
+        let t = end_at;
         for ch in 0..16u8 {
             deliver(
                 &mut out,
@@ -474,7 +500,9 @@ where
     };
     let drained = match stopped_at {
         Some(t) => robot.stop(t.max(wire_end)).map_err(robot_err)?,
-        None => robot.drain(last_at.max(wire_end) + 1).map_err(robot_err)?,
+        None => robot
+            .drain(end_at.max(last_at).max(wire_end) + 1)
+            .map_err(robot_err)?,
     };
     for d in robot.drain_decided() {
         ledger.decided(d.t_us, d.event);
@@ -571,4 +599,10 @@ fn din_burst(finals: &[&Planned], mut status: RunningStatus) -> (i64, usize) {
     }
     let mean_arrival = if sends > 0 { sum * byte / sends } else { 0 };
     (target - mean_arrival, members.max(1))
+}
+
+/// The longest shortest-sounding press of any key, with the bus's margin: how long the end of
+/// a song waits so that a key struck last still sounds.
+fn rules_min_hold(setup: &Setup) -> u64 {
+    setup.rules().min_hold_us.into_iter().max().unwrap_or(0)
 }
