@@ -1,6 +1,6 @@
 //! The interpreter: decoded messages and the current time in, finger frames out.
 
-use crate::config::{Config, ConfigError, GuardConfig, Overlap};
+use crate::config::{Config, ConfigError, DutyLimit, GuardConfig, Overlap};
 use crate::decoder::{Counters, Decoder};
 use crate::fingers::{
     Fingers, AGE_CAP, DOWN, FOLDED, LATE, PENDING, READY, RELEASE_AFTER, RELEASING,
@@ -388,10 +388,22 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         }
     }
 
+    /// The duty limit, if any. Always `None` without the `duty-limit` feature (a configuration
+    /// with one is refused then), so its arithmetic (64-bit multiplications and divisions, 4 KB
+    /// of AVR code) is left out of the build.
+    #[inline(always)]
+    fn duty(&self) -> Option<DutyLimit> {
+        if cfg!(feature = "duty-limit") {
+            self.config.guard.duty
+        } else {
+            None
+        }
+    }
+
     /// How long after its press the duty limit cuts `key` (down), from its heat at the
     /// press; `None` without a duty limit.
     fn duty_cut_after(&self, key: u8) -> Option<u32> {
-        let d = self.config.guard.duty?;
+        let d = self.duty()?;
         let (on, window) = (d.max_on.as_micros() as u64, d.window.as_micros() as u64);
         if on >= window {
             return None;
@@ -659,7 +671,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     }
 
     fn press_now(&mut self, key: u8, now: Instant) {
-        if let Some(d) = self.config.guard.duty {
+        if let Some(d) = self.duty() {
             // The key cooled at the duty while it was up.
             let up = self.fingers.age(key, now) as u64;
             let cooled = up * d.max_on.as_micros() as u64 / d.window.as_micros().max(1) as u64;
@@ -709,7 +721,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     /// Releases `key` now if it is down.
     fn release_now(&mut self, key: u8, now: Instant) {
         if self.fingers.phase(key) == DOWN {
-            if let Some(d) = self.config.guard.duty {
+            if let Some(d) = self.duty() {
                 // It heated at (1 − duty) while it was down; rounded up, to be safe.
                 let (on, window) = (d.max_on.as_micros() as u64, d.window.as_micros() as u64);
                 let down = self.fingers.age(key, now) as u64;
