@@ -58,6 +58,10 @@
 //! - `duty-limit` (default): the guard's per-key duty limit ([`DutyLimit`]), 2 bytes of RAM a
 //!   key. The ATmega16 firmware builds without it (its 1 KB of SRAM has no room); its hold
 //!   limit and watchdog still apply.
+//! - `stats` (default): [`Interpreter::stats`] counts what became of the notes ([`Stats`],
+//!   64 bytes of RAM and the code that counts). Without it every count reads 0; the
+//!   [`NoteEvent`]s, which carry the same account note by note, are unchanged. The ATmega16
+//!   firmware builds without it.
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
