@@ -1,6 +1,6 @@
 //! The interpreter: decoded messages and the current time in, finger frames out.
 
-use crate::config::{Config, ConfigError, DutyLimit, GuardConfig, Overlap};
+use crate::config::{Config, ConfigError, ConfigSource, DutyLimit, GuardConfig, Overlap, Thesis};
 use crate::decoder::{Counters, Decoder};
 use crate::fingers::{Fingers, AGE_CAP, DOWN, FOLDED, LATE, PENDING, RELEASE_AFTER, RELEASING};
 use crate::frame::{FingerFrame, FlushError};
@@ -29,8 +29,31 @@ pub enum KeyPhase {
     Down,
 }
 
-/// `due` when no per-key timer runs.
-const NEVER: Instant = Instant::from_micros(u64::MAX);
+/// An instant kept with its bits inverted, so that "never" (`u64::MAX`) is all zero bits:
+/// with these fields at never and a constant configuration, the interpreter's initial state is
+/// all zeros, and an MCU keeps it in `.bss` instead of copying it from flash.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Kept(u64);
+
+impl Kept {
+    const NEVER: Self = Self(0);
+
+    #[inline(always)]
+    fn new(t: Instant) -> Self {
+        Self(!t.as_micros())
+    }
+
+    #[inline(always)]
+    fn get(self) -> Instant {
+        Instant::from_micros(!self.0)
+    }
+
+    /// The earlier of `self` and `t`.
+    #[inline(always)]
+    fn min(self, t: Instant) -> Self {
+        Self(self.0.max(!t.as_micros()))
+    }
+}
 
 /// Per-key ages are clamped whenever the clock passes a multiple of this (half [`AGE_CAP`]).
 const CLAMP_EVERY: u64 = 1 << 30;
@@ -61,8 +84,13 @@ fn rest_us(g: &GuardConfig) -> u32 {
 /// note that is already on (the same channel and note, no Note-Off between) re-strikes the key,
 /// unless the key struck less than the guard's `min_press` ago (then it joins that strike).
 #[derive(Clone, Debug)]
-pub struct Interpreter<const B: usize = 4, const K: usize = 61, H: HeldNotes = NoteTable> {
-    config: Config<B>,
+pub struct Interpreter<
+    const B: usize = 4,
+    const K: usize = 61,
+    H: HeldNotes = NoteTable,
+    C: ConfigSource<B> = Config<B>,
+> {
+    config: Settings<B, C>,
     decoder: Decoder,
     /// The notes that are on, and the keys they hold.
     notes: H,
@@ -76,16 +104,17 @@ pub struct Interpreter<const B: usize = 4, const K: usize = 61, H: HeldNotes = N
     last_input: Instant,
     /// An Active Sensing byte was seen and the 300 ms rule is in force.
     sensing: bool,
-    /// No per-key deadline falls before this ([`NEVER`] if none runs).
-    due: Instant,
-    /// [`next_deadline`](Self::next_deadline), kept up to date ([`NEVER`] for `None`) by
+    /// No per-key deadline falls before this ([`Kept::NEVER`] if none runs).
+    due: Kept,
+    /// [`next_deadline`](Self::next_deadline), kept up to date ([`Kept::NEVER`] for `None`) by
     /// [`refresh`](Self::refresh) at the end of every call that changes the state.
-    deadline: Instant,
+    deadline: Kept,
     /// The earliest time [`tick`](Self::tick) has anything to do: [`deadline`](Self::deadline),
-    /// or earlier when the Active Sensing rule would lapse with no key down ([`NEVER`]: nothing).
-    wake: Instant,
-    /// The next multiple of 2³⁰ µs after the clock: per-key ages are clamped when it passes.
-    clamp_at: Instant,
+    /// or earlier when the Active Sensing rule would lapse with no key down ([`Kept::NEVER`]: nothing).
+    wake: Kept,
+    /// The last multiple of 2³⁰ µs the clock passed: per-key ages are clamped when it passes
+    /// the next one.
+    clamped: Instant,
     #[cfg(feature = "stats")]
     stats: Stats,
 }
@@ -106,6 +135,28 @@ impl<H: HeldNotes> Interpreter<4, 61, H> {
     }
 }
 
+impl<H: HeldNotes> Interpreter<4, 61, H, Thesis> {
+    /// [`thesis_with`](Interpreter::thesis_with) with the configuration a constant
+    /// ([`Thesis`]): the same behaviour, no configuration in RAM, and the compiler folds the
+    /// layout and the guard's limits into the code. Its initial state is all zero bits, so an
+    /// MCU's `static` of it goes in `.bss` and takes no flash.
+    pub const fn thesis_fixed() -> Self {
+        Self::unchecked(Thesis)
+    }
+}
+
+/// The interpreter's configuration, read through [`ConfigSource`].
+#[derive(Clone, Debug)]
+struct Settings<const B: usize, C>(C);
+
+impl<const B: usize, C: ConfigSource<B>> core::ops::Deref for Settings<B, C> {
+    type Target = Config<B>;
+    #[inline(always)]
+    fn deref(&self) -> &Config<B> {
+        self.0.get()
+    }
+}
+
 impl Default for Interpreter<4, 61> {
     fn default() -> Self {
         Self::thesis()
@@ -118,10 +169,12 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         config.validate(K)?;
         Ok(Self::unchecked(config))
     }
+}
 
-    const fn unchecked(config: Config<B>) -> Self {
+impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpreter<B, K, H, C> {
+    const fn unchecked(config: C) -> Self {
         Self {
-            config,
+            config: Settings(config),
             decoder: Decoder::new(),
             notes: H::EMPTY,
             fingers: Fingers::new(),
@@ -130,10 +183,10 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             clock: Instant::ZERO,
             last_input: Instant::ZERO,
             sensing: false,
-            due: NEVER,
-            deadline: NEVER,
-            wake: NEVER,
-            clamp_at: Instant::from_micros(CLAMP_EVERY),
+            due: Kept::NEVER,
+            deadline: Kept::NEVER,
+            wake: Kept::NEVER,
+            clamped: Instant::ZERO,
             #[cfg(feature = "stats")]
             stats: NO_STATS,
         }
@@ -160,7 +213,7 @@ const NO_STATS: Stats = Stats {
     peak_keys_down: 0,
 };
 
-impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
+impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpreter<B, K, H, C> {
     /// The configuration.
     pub fn config(&self) -> &Config<B> {
         &self.config
@@ -302,7 +355,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     /// the first thing to do; it can be earlier (a key released in the meantime), in which case
     /// that tick does nothing and the next call answers anew.
     pub fn next_deadline(&self) -> Option<Instant> {
-        (self.deadline != NEVER).then_some(self.deadline)
+        (self.deadline != Kept::NEVER).then_some(self.deadline.get())
     }
 
     /// Recomputes [`deadline`](Self::deadline) and [`wake`](Self::wake) from `due`,
@@ -314,8 +367,8 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             return;
         }
         let busy = self.fingers.down + self.fingers.pending > 0;
-        let mut deadline = self.due;
-        let mut wake = self.due;
+        self.deadline = self.due;
+        self.wake = self.due;
         if busy || self.sensing {
             // The watchdog and the Active Sensing rule, both counted from the last input:
             // the earlier of the two.
@@ -325,15 +378,12 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
                     Some(quiet.map_or(ACTIVE_SENSING_TIMEOUT, |wd| wd.min(ACTIVE_SENSING_TIMEOUT)));
             }
             if let Some(quiet) = quiet {
-                let starve = self.last_input + quiet;
-                wake = wake.min(starve);
+                self.wake = self.due.min(self.last_input + quiet);
                 if busy {
-                    deadline = wake;
+                    self.deadline = self.wake;
                 }
             }
         }
-        self.deadline = deadline;
-        self.wake = wake;
     }
 
     /// Runs the guard's timers at `now`: hold limits, the duty limit, delayed re-strikes, the
@@ -347,7 +397,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     pub fn tick_with<S: NoteSink>(&mut self, now: Instant, sink: &mut S) {
         self.advance(now);
         // Nothing can be due before `wake`: one compare on every byte fed.
-        if self.clock < self.wake {
+        if self.clock < self.wake.get() {
             return;
         }
         self.run_timers(sink, false);
@@ -384,7 +434,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
                 self.release_everything(now, DropReason::Cancelled, sink);
             }
         }
-        if now < self.due && !every_key {
+        if now < self.due.get() && !every_key {
             return;
         }
         let g = &self.config.guard;
@@ -451,7 +501,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
                 soonest(gap - age);
             }
         }
-        self.due = next.map_or(NEVER, |n| now + Duration::from_micros(n));
+        self.due = next.map_or(Kept::NEVER, |n| Kept::new(now + Duration::from_micros(n)));
     }
 
     fn keys(&self) -> u8 {
@@ -465,7 +515,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         }
         let before = self.clock;
         self.clock = now;
-        if now < self.clamp_at {
+        if now.saturating_since(self.clamped) < CLAMP_EVERY {
             return;
         }
         // Ages are clamped well before they could wrap: whenever the clock jumps by at least
@@ -479,8 +529,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             self.fingers.clamp_ages(before, false);
             self.fingers.clamp_ages(now, false);
         }
-        let epoch = now.as_micros() / CLAMP_EVERY;
-        self.clamp_at = Instant::from_micros(epoch.saturating_add(1).saturating_mul(CLAMP_EVERY));
+        self.clamped = Instant::from_micros(now.as_micros() & !(CLAMP_EVERY - 1));
     }
 
     /// The duty limit, if any. Always `None` without the `duty-limit` feature (a configuration

@@ -9,13 +9,16 @@
 //! times are not), every deadline falls on a tick of the reference; so both must make the same
 //! board writes at the same times, and report the same `NoteEvent`s at the same times, the
 //! same counters and statistics.
+//!
+//! Also: the thesis's configuration as a constant ([`Thesis`]) plays like the same
+//! configuration held in the interpreter.
 
 mod common;
 
 use common::{guard, musical_chunk};
 use orch_core::{
-    ChannelMask, Config, Counters, Duration, Instant, Interpreter, KeyPhase, NoteEvent, OutOfRange,
-    Overlap, Recording, Stats,
+    ChannelMask, Config, Counters, Duration, Instant, Interpreter, KeyPhase, NoteEvent, NotePool,
+    OutOfRange, Overlap, Recording, Stats, Thesis,
 };
 use proptest::prelude::*;
 
@@ -167,5 +170,36 @@ proptest! {
         prop_assert_eq!(&fast.events, &reference.events);
         prop_assert_eq!(&fast.writes, &reference.writes);
         prop_assert_eq!(fast, reference);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// The thesis's configuration as a constant type plays exactly like the same
+    /// configuration held in the interpreter.
+    #[test]
+    fn the_fixed_thesis_configuration_plays_like_the_held_one(chunks in timed_chunks()) {
+        let mut held = Interpreter::<4, 61, NotePool<32>>::thesis_with();
+        let mut fixed = Interpreter::<4, 61, NotePool<32>, Thesis>::thesis_fixed();
+        prop_assert_eq!(held.config(), fixed.config());
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        let mut t = 0;
+        for (gap, bytes) in &chunks {
+            t += gap * 1000;
+            let now = Instant::from_micros(t);
+            while let Some(d) = held.next_deadline().filter(|&d| d <= now) {
+                prop_assert_eq!(fixed.next_deadline(), Some(d));
+                held.tick_with(d, &mut |e| a.push((d, e)));
+                fixed.tick_with(d, &mut |e| b.push((d, e)));
+                prop_assert_eq!(held.frame(), fixed.frame());
+            }
+            held.feed_slice_with(bytes, now, &mut |e| a.push((now, e)));
+            fixed.feed_slice_with(bytes, now, &mut |e| b.push((now, e)));
+            prop_assert_eq!(held.frame(), fixed.frame());
+            prop_assert_eq!(held.next_deadline(), fixed.next_deadline());
+        }
+        prop_assert_eq!(a, b);
+        prop_assert_eq!(held.stats(), fixed.stats());
     }
 }

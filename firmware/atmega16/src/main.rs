@@ -27,12 +27,12 @@ use core::convert::Infallible;
 use core::ptr::addr_of_mut;
 
 use avr_device::atmega16::Peripherals;
-use orch_core::{BoardId, FingerBoards, Instant, Interpreter, NotePool};
+use orch_core::{BoardId, FingerBoards, Instant, Interpreter, NotePool, Thesis};
 
 /// How often boards that failed are initialised and written again.
 const RETRY_US: u64 = 10_000;
 
-type Robot = Interpreter<4, 61, NotePool<32>>;
+type Robot = Interpreter<4, 61, NotePool<32>, Thesis>;
 
 /// The boards as the interpreter's frame sees them: each write is queued for the TWI handler
 /// (the frame takes it as written). A board set aside after failing [`twi::ATTEMPTS`] times
@@ -63,7 +63,7 @@ fn init_board(board: u8, outputs: u16) {
 
 /// The interpreter (about 630 bytes) lives in a static built at compile time: built at run
 /// time it would pass through the stack, twice its size in 1 KB of SRAM.
-static mut ROBOT: Robot = Robot::thesis_with();
+static mut ROBOT: Robot = Robot::thesis_fixed();
 
 #[avr_device::entry]
 fn main() -> ! {
