@@ -53,6 +53,23 @@ impl Kept {
     fn min(self, t: Instant) -> Self {
         Self(self.0.max(!t.as_micros()))
     }
+
+    /// Whether `now` is at or past the kept instant (never for [`Kept::NEVER`]).
+    #[inline(always)]
+    fn passed(self, now: Instant) -> bool {
+        // now >= t  <=>  !now <= !t
+        !now.as_micros() <= self.0
+    }
+
+    /// The earlier of `self` and `t + d` (saturating at never, as `Instant + Duration`).
+    #[inline(always)]
+    fn min_after(self, t: Instant, d: Duration) -> Self {
+        // !(t + d) = !t - d, and a sum past the end of time saturates to never (0).
+        Self(
+            self.0
+                .max((!t.as_micros()).saturating_sub(d.as_micros() as u64)),
+        )
+    }
 }
 
 /// Per-key ages are clamped whenever the clock passes a multiple of this (half [`AGE_CAP`]).
@@ -378,7 +395,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                     Some(quiet.map_or(ACTIVE_SENSING_TIMEOUT, |wd| wd.min(ACTIVE_SENSING_TIMEOUT)));
             }
             if let Some(quiet) = quiet {
-                self.wake = self.due.min(self.last_input + quiet);
+                self.wake = self.due.min_after(self.last_input, quiet);
                 if busy {
                     self.deadline = self.wake;
                 }
@@ -394,12 +411,20 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
 
     /// [`tick`](Self::tick), telling `sink` about delayed strikes that happen
     /// ([`NoteEvent::WaitOver`]) or are cancelled.
+    #[inline]
     pub fn tick_with<S: NoteSink>(&mut self, now: Instant, sink: &mut S) {
         self.advance(now);
-        // Nothing can be due before `wake`: one compare on every byte fed.
-        if self.clock < self.wake.get() {
+        // Nothing can be due before `wake`: one compare on every byte fed (inlined there; the
+        // timers' work is not).
+        if !self.wake.passed(self.clock) {
             return;
         }
+        self.run_due(sink);
+    }
+
+    /// [`tick_with`](Self::tick_with)'s work once `wake` has passed.
+    #[inline(never)]
+    fn run_due<S: NoteSink>(&mut self, sink: &mut S) {
         self.run_timers(sink, false);
         self.refresh();
     }
@@ -434,7 +459,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 self.release_everything(now, DropReason::Cancelled, sink);
             }
         }
-        if now < self.due.get() && !every_key {
+        if !self.due.passed(now) && !every_key {
             return;
         }
         let g = &self.config.guard;
@@ -509,15 +534,24 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     }
 
     /// Moves the clock to `now` (never back) and keeps per-key ages from wrapping.
+    #[inline(always)]
     fn advance(&mut self, now: Instant) {
         if now <= self.clock {
             return;
         }
         let before = self.clock;
         self.clock = now;
-        if now.saturating_since(self.clamped) < CLAMP_EVERY {
-            return;
+        // `clamped` <= `before` < `now`: no wrap.
+        if now.as_micros().wrapping_sub(self.clamped.as_micros()) >= CLAMP_EVERY {
+            self.clamp_ages(before, now);
         }
+    }
+
+    /// Keeps per-key ages from wrapping, when the clock moved from `before` to `now` past a
+    /// multiple of 2³⁰ µs.
+    #[cold]
+    #[inline(never)]
+    fn clamp_ages(&mut self, before: Instant, now: Instant) {
         // Ages are clamped well before they could wrap: whenever the clock jumps by at least
         // the cap (everything is old), and at least once every cap/2 of clock time (when it
         // passes a multiple of 2³⁰ µs). Ages can be up to 1.5 × cap just before a clamp, so a
