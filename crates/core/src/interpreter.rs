@@ -384,8 +384,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             return;
         }
         let busy = self.fingers.down + self.fingers.pending > 0;
-        self.deadline = self.due;
-        self.wake = self.due;
+        let mut wake = self.due;
         if busy || self.sensing {
             // The watchdog and the Active Sensing rule, both counted from the last input:
             // the earlier of the two.
@@ -395,12 +394,12 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                     Some(quiet.map_or(ACTIVE_SENSING_TIMEOUT, |wd| wd.min(ACTIVE_SENSING_TIMEOUT)));
             }
             if let Some(quiet) = quiet {
-                self.wake = self.due.min_after(self.last_input, quiet);
-                if busy {
-                    self.deadline = self.wake;
-                }
+                wake = wake.min_after(self.last_input, quiet);
             }
         }
+        // Each stored once (64-bit stores are dear on 8-bit MCUs).
+        self.wake = wake;
+        self.deadline = if busy { wake } else { self.due };
     }
 
     /// Runs the guard's timers at `now`: hold limits, the duty limit, delayed re-strikes, the
