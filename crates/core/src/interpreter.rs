@@ -962,6 +962,7 @@ mod tests {
         let mut i = Interpreter::<4, 61, NotePool<2>>::new(config).unwrap();
         i.feed_slice(&[0x90, 60, 1, 61, 1, 62, 1], Instant::ZERO);
         assert_eq!(i.keys_down(), 2);
+        #[cfg(feature = "stats")]
         assert_eq!(i.stats().dropped_power, 1);
         i.feed_slice(&[0x80, 62, 0, 60, 0], Instant::ZERO);
         assert_eq!(i.keys_down(), 1);
