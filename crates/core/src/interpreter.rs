@@ -87,8 +87,10 @@ fn rest_us(g: &GuardConfig) -> u32 {
 /// Turns MIDI into finger-board outputs, safely.
 ///
 /// `B` is the number of finger boards, `K` the most keys it can serve (the default, 61, is the
-/// thesis's keyboard) and `H` the store of held notes ([`NoteTable`] by default;
-/// [`NotePool`](crate::NotePool) on small MCUs). The crate docs give the RAM figures.
+/// thesis's keyboard), `H` the store of held notes ([`NoteTable`] by default;
+/// [`NotePool`](crate::NotePool) on small MCUs) and `C` where the configuration comes from
+/// ([`Config`] itself by default; a constant such as [`Thesis`] on an MCU with a fixed robot,
+/// see [`ConfigSource`]). The crate docs give the RAM figures.
 ///
 /// Feed it bytes with [`feed`](Self::feed) (or decoded messages with
 /// [`handle`](Self::handle)), call [`tick`](Self::tick) when no input arrives (at the latest at
