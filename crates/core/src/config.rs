@@ -175,6 +175,40 @@ impl Default for Config<4> {
     }
 }
 
+/// Where an [`Interpreter`](crate::Interpreter) finds its configuration.
+///
+/// - [`Config`] itself (the default): any configuration, checked and chosen at run time, kept
+///   in the interpreter's state.
+/// - A zero-sized type that hands out a constant, such as [`Thesis`]: the compiler folds the
+///   key range, the layout and the guard's limits into the code, and the configuration takes
+///   no RAM. For MCUs with a fixed robot.
+pub trait ConfigSource<const B: usize>: Clone + core::fmt::Debug {
+    /// The configuration.
+    fn get(&self) -> &Config<B>;
+}
+
+impl<const B: usize> ConfigSource<B> for Config<B> {
+    #[inline(always)]
+    fn get(&self) -> &Config<B> {
+        self
+    }
+}
+
+/// [`Config::THESIS`] as a constant: `Interpreter<4, 61, H, Thesis>` (built with
+/// [`Interpreter::thesis_fixed`](crate::Interpreter::thesis_fixed)) plays exactly like
+/// [`Interpreter::thesis`](crate::Interpreter::thesis) with no configuration in RAM, and
+/// smaller, faster code.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Thesis;
+
+impl ConfigSource<4> for Thesis {
+    #[inline(always)]
+    fn get(&self) -> &Config<4> {
+        const THESIS: Config<4> = Config::THESIS;
+        &THESIS
+    }
+}
+
 /// A configuration the interpreter cannot run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ConfigError {

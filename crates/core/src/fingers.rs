@@ -35,10 +35,17 @@ pub(crate) const RELEASE_AFTER: u8 = 0b1_0000;
 /// The key struck late (after waiting for its re-strike gap): it is held at least `min_press`.
 pub(crate) const LATE: u8 = 0b10_0000;
 
-/// Physical state of `K` keys: 8 bytes a key (6 without the `duty-limit` feature).
+/// The most keys the timed-key mask covers: every note of MIDI has at most one key.
+const MASK_KEYS: usize = 128;
+
+/// Physical state of `K` keys: 8 bytes a key (6 without the `duty-limit` feature), and a
+/// 16-byte mask of the keys whose timers run.
 #[derive(Clone, Debug)]
 pub(crate) struct Fingers<const K: usize> {
     flags: [u8; K],
+    /// One bit a key: set while the key is `DOWN` or `PENDING` (the only phases with a
+    /// timer), so the guard visits those keys only. A key range has at most 128 keys.
+    timed: [u8; MASK_KEYS / 8],
     stamp: [u32; K],
     velocity: [u8; K],
     /// The duty limit's heat, in ms (see [`DutyLimit`](crate::DutyLimit)), as of the key's
@@ -55,6 +62,7 @@ impl<const K: usize> Fingers<K> {
     pub const fn new() -> Self {
         Self {
             flags: [READY; K],
+            timed: [0; MASK_KEYS / 8],
             stamp: [0; K],
             velocity: [0; K],
             #[cfg(feature = "duty-limit")]
@@ -110,12 +118,31 @@ impl<const K: usize> Fingers<K> {
             PENDING => self.pending += 1,
             _ => {}
         }
+        let bit = 1 << (k % 8);
         let keep = if phase == DOWN || phase == PENDING {
+            self.timed[k / 8 % (MASK_KEYS / 8)] |= bit;
             self.flags[k] & (FOLDED | RELEASE_AFTER | LATE)
         } else {
+            self.timed[k / 8 % (MASK_KEYS / 8)] &= !bit;
             0
         };
         self.flags[k] = phase | keep;
+    }
+
+    /// The first key from `from` on that is `DOWN` or `PENDING`, in key order.
+    pub fn next_timed(&self, from: u8) -> Option<u8> {
+        let end = K.min(MASK_KEYS);
+        let mut k = from as usize;
+        while k < end {
+            let bits = self.timed[k / 8] >> (k % 8);
+            if bits == 0 {
+                k = (k | 7) + 1;
+            } else {
+                k += bits.trailing_zeros() as usize;
+                return (k < end).then_some(k as u8);
+            }
+        }
+        None
     }
 
     #[cfg(feature = "duty-limit")]
@@ -132,6 +159,9 @@ impl<const K: usize> Fingers<K> {
     pub fn heat_ms(&self, _key: u8) -> u16 {
         0
     }
+
+    #[cfg(not(feature = "duty-limit"))]
+    pub fn set_heat_ms(&mut self, _key: u8, _heat: u64) {}
 
     pub fn set_velocity(&mut self, key: u8, velocity: u8) {
         self.velocity[key as usize] = velocity;

@@ -1,10 +1,8 @@
 //! The interpreter: decoded messages and the current time in, finger frames out.
 
-use crate::config::{Config, ConfigError, GuardConfig, Overlap};
+use crate::config::{Config, ConfigError, ConfigSource, DutyLimit, GuardConfig, Overlap, Thesis};
 use crate::decoder::{Counters, Decoder};
-use crate::fingers::{
-    Fingers, AGE_CAP, DOWN, FOLDED, LATE, PENDING, READY, RELEASE_AFTER, RELEASING,
-};
+use crate::fingers::{Fingers, AGE_CAP, DOWN, FOLDED, LATE, PENDING, RELEASE_AFTER, RELEASING};
 use crate::frame::{FingerFrame, FlushError};
 use crate::held::{HeldNotes, NoteTable};
 use crate::keymap::KeyOf;
@@ -31,8 +29,51 @@ pub enum KeyPhase {
     Down,
 }
 
-/// `due` when no per-key timer runs.
-const NEVER: Instant = Instant::from_micros(u64::MAX);
+/// An instant kept with its bits inverted, so that "never" (`u64::MAX`) is all zero bits:
+/// with these fields at never and a constant configuration, the interpreter's initial state is
+/// all zeros, and an MCU keeps it in `.bss` instead of copying it from flash.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Kept(u64);
+
+impl Kept {
+    const NEVER: Self = Self(0);
+
+    #[inline(always)]
+    fn new(t: Instant) -> Self {
+        Self(!t.as_micros())
+    }
+
+    #[inline(always)]
+    fn get(self) -> Instant {
+        Instant::from_micros(!self.0)
+    }
+
+    /// The earlier of `self` and `t`.
+    #[inline(always)]
+    fn min(self, t: Instant) -> Self {
+        Self(self.0.max(!t.as_micros()))
+    }
+
+    /// Whether `now` is at or past the kept instant (never for [`Kept::NEVER`]).
+    #[inline(always)]
+    fn passed(self, now: Instant) -> bool {
+        // now >= t  <=>  !now <= !t
+        !now.as_micros() <= self.0
+    }
+
+    /// The earlier of `self` and `t + d` (saturating at never, as `Instant + Duration`).
+    #[inline(always)]
+    fn min_after(self, t: Instant, d: Duration) -> Self {
+        // !(t + d) = !t - d, and a sum past the end of time saturates to never (0).
+        Self(
+            self.0
+                .max((!t.as_micros()).saturating_sub(d.as_micros() as u64)),
+        )
+    }
+}
+
+/// Per-key ages are clamped whenever the clock passes a multiple of this (half [`AGE_CAP`]).
+const CLAMP_EVERY: u64 = 1 << 30;
 
 /// How long a released key rests before it may strike again, in µs: the re-strike gap, but at
 /// least 1 µs. A key released at some instant never strikes again at that same instant, even
@@ -46,8 +87,10 @@ fn rest_us(g: &GuardConfig) -> u32 {
 /// Turns MIDI into finger-board outputs, safely.
 ///
 /// `B` is the number of finger boards, `K` the most keys it can serve (the default, 61, is the
-/// thesis's keyboard) and `H` the store of held notes ([`NoteTable`] by default;
-/// [`NotePool`](crate::NotePool) on small MCUs). The crate docs give the RAM figures.
+/// thesis's keyboard), `H` the store of held notes ([`NoteTable`] by default;
+/// [`NotePool`](crate::NotePool) on small MCUs) and `C` where the configuration comes from
+/// ([`Config`] itself by default; a constant such as [`Thesis`] on an MCU with a fixed robot,
+/// see [`ConfigSource`]). The crate docs give the RAM figures.
 ///
 /// Feed it bytes with [`feed`](Self::feed) (or decoded messages with
 /// [`handle`](Self::handle)), call [`tick`](Self::tick) when no input arrives (at the latest at
@@ -60,8 +103,13 @@ fn rest_us(g: &GuardConfig) -> u32 {
 /// note that is already on (the same channel and note, no Note-Off between) re-strikes the key,
 /// unless the key struck less than the guard's `min_press` ago (then it joins that strike).
 #[derive(Clone, Debug)]
-pub struct Interpreter<const B: usize = 4, const K: usize = 61, H: HeldNotes = NoteTable> {
-    config: Config<B>,
+pub struct Interpreter<
+    const B: usize = 4,
+    const K: usize = 61,
+    H: HeldNotes = NoteTable,
+    C: ConfigSource<B> = Config<B>,
+> {
+    config: Settings<B, C>,
     decoder: Decoder,
     /// The notes that are on, and the keys they hold.
     notes: H,
@@ -75,8 +123,18 @@ pub struct Interpreter<const B: usize = 4, const K: usize = 61, H: HeldNotes = N
     last_input: Instant,
     /// An Active Sensing byte was seen and the 300 ms rule is in force.
     sensing: bool,
-    /// No per-key deadline falls before this ([`NEVER`] if none runs).
-    due: Instant,
+    /// No per-key deadline falls before this ([`Kept::NEVER`] if none runs).
+    due: Kept,
+    /// [`next_deadline`](Self::next_deadline), kept up to date ([`Kept::NEVER`] for `None`) by
+    /// [`refresh`](Self::refresh) at the end of every call that changes the state.
+    deadline: Kept,
+    /// The earliest time [`tick`](Self::tick) has anything to do: [`deadline`](Self::deadline),
+    /// or earlier when the Active Sensing rule would lapse with no key down ([`Kept::NEVER`]: nothing).
+    wake: Kept,
+    /// The last multiple of 2³⁰ µs the clock passed: per-key ages are clamped when it passes
+    /// the next one.
+    clamped: Instant,
+    #[cfg(feature = "stats")]
     stats: Stats,
 }
 
@@ -96,6 +154,28 @@ impl<H: HeldNotes> Interpreter<4, 61, H> {
     }
 }
 
+impl<H: HeldNotes> Interpreter<4, 61, H, Thesis> {
+    /// [`thesis_with`](Interpreter::thesis_with) with the configuration a constant
+    /// ([`Thesis`]): the same behaviour, no configuration in RAM, and the compiler folds the
+    /// layout and the guard's limits into the code. Its initial state is all zero bits, so an
+    /// MCU's `static` of it goes in `.bss` and takes no flash.
+    pub const fn thesis_fixed() -> Self {
+        Self::unchecked(Thesis)
+    }
+}
+
+/// The interpreter's configuration, read through [`ConfigSource`].
+#[derive(Clone, Debug)]
+struct Settings<const B: usize, C>(C);
+
+impl<const B: usize, C: ConfigSource<B>> core::ops::Deref for Settings<B, C> {
+    type Target = Config<B>;
+    #[inline(always)]
+    fn deref(&self) -> &Config<B> {
+        self.0.get()
+    }
+}
+
 impl Default for Interpreter<4, 61> {
     fn default() -> Self {
         Self::thesis()
@@ -108,10 +188,12 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         config.validate(K)?;
         Ok(Self::unchecked(config))
     }
+}
 
-    const fn unchecked(config: Config<B>) -> Self {
+impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpreter<B, K, H, C> {
+    const fn unchecked(config: C) -> Self {
         Self {
-            config,
+            config: Settings(config),
             decoder: Decoder::new(),
             notes: H::EMPTY,
             fingers: Fingers::new(),
@@ -120,28 +202,37 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             clock: Instant::ZERO,
             last_input: Instant::ZERO,
             sensing: false,
-            due: NEVER,
-            stats: Stats {
-                note_ons: 0,
-                played: 0,
-                folded: 0,
-                folded_octaves: 0,
-                dropped_channel: 0,
-                dropped_range: 0,
-                dropped_power: 0,
-                dropped_cancelled: 0,
-                dropped_too_fast: 0,
-                dropped_stopped: 0,
-                joined: 0,
-                restrikes_delayed: 0,
-                cut_by_hold_limit: 0,
-                cut_by_duty_limit: 0,
-                cut_by_watchdog: 0,
-                peak_keys_down: 0,
-            },
+            due: Kept::NEVER,
+            deadline: Kept::NEVER,
+            wake: Kept::NEVER,
+            clamped: Instant::ZERO,
+            #[cfg(feature = "stats")]
+            stats: NO_STATS,
         }
     }
+}
 
+/// Every count 0.
+const NO_STATS: Stats = Stats {
+    note_ons: 0,
+    played: 0,
+    folded: 0,
+    folded_octaves: 0,
+    dropped_channel: 0,
+    dropped_range: 0,
+    dropped_power: 0,
+    dropped_cancelled: 0,
+    dropped_too_fast: 0,
+    dropped_stopped: 0,
+    joined: 0,
+    restrikes_delayed: 0,
+    cut_by_hold_limit: 0,
+    cut_by_duty_limit: 0,
+    cut_by_watchdog: 0,
+    peak_keys_down: 0,
+};
+
+impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpreter<B, K, H, C> {
     /// The configuration.
     pub fn config(&self) -> &Config<B> {
         &self.config
@@ -158,8 +249,22 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     }
 
     /// What happened to the notes so far.
+    ///
+    /// Without the `stats` feature nothing is counted and every count is 0.
     pub fn stats(&self) -> &Stats {
-        &self.stats
+        #[cfg(feature = "stats")]
+        return &self.stats;
+        #[cfg(not(feature = "stats"))]
+        return &NO_STATS;
+    }
+
+    /// Counts into the statistics; nothing without the `stats` feature.
+    #[inline(always)]
+    fn count(&mut self, f: impl FnOnce(&mut Stats)) {
+        #[cfg(feature = "stats")]
+        f(&mut self.stats);
+        #[cfg(not(feature = "stats"))]
+        let _ = f;
     }
 
     /// The decoder's counters (bytes, messages, dropped, abandoned).
@@ -177,10 +282,13 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         if key as usize >= K {
             return KeyPhase::Up;
         }
+        let g = &self.config.guard;
         match self.fingers.phase(key) {
             DOWN => KeyPhase::Down,
             PENDING => KeyPhase::Waiting,
-            RELEASING => KeyPhase::Resting,
+            RELEASING if g.enabled && self.fingers.age(key, self.clock) < rest_us(g) => {
+                KeyPhase::Resting
+            }
             _ => KeyPhase::Up,
         }
     }
@@ -214,6 +322,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         for message in self.decoder.push(byte) {
             self.apply(message, now, sink);
         }
+        self.refresh();
     }
 
     /// Feeds bytes that all arrived at `now`.
@@ -239,6 +348,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         let now = self.clock;
         self.last_input = now;
         self.apply(message, now, sink);
+        self.refresh();
     }
 
     /// Releases every key now: for shutdown, panics and errors. Notes waiting to re-strike are
@@ -254,6 +364,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         self.advance(now);
         let now = self.clock;
         self.release_everything(now, DropReason::Stopped, sink);
+        self.refresh();
     }
 
     /// When [`tick`](Self::tick) should next be called: the earliest hold limit, delayed
@@ -263,21 +374,34 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     /// the first thing to do; it can be earlier (a key released in the meantime), in which case
     /// that tick does nothing and the next call answers anew.
     pub fn next_deadline(&self) -> Option<Instant> {
+        (self.deadline != Kept::NEVER).then_some(self.deadline.get())
+    }
+
+    /// Recomputes [`deadline`](Self::deadline) and [`wake`](Self::wake) from `due`,
+    /// `last_input`, `sensing` and the key counts: called at the end of every public method
+    /// that can change them.
+    fn refresh(&mut self) {
         let g = &self.config.guard;
         if !g.enabled {
-            return None;
+            return;
         }
-        let mut next = (self.due != NEVER).then_some(self.due);
-        if self.fingers.down + self.fingers.pending > 0 {
-            let mut consider = |t: Instant| next = Some(next.map_or(t, |n| n.min(t)));
-            if let Some(wd) = g.watchdog {
-                consider(self.last_input + wd);
-            }
+        let busy = self.fingers.down + self.fingers.pending > 0;
+        let mut wake = self.due;
+        if busy || self.sensing {
+            // The watchdog and the Active Sensing rule, both counted from the last input:
+            // the earlier of the two.
+            let mut quiet = g.watchdog;
             if self.sensing {
-                consider(self.last_input + ACTIVE_SENSING_TIMEOUT);
+                quiet =
+                    Some(quiet.map_or(ACTIVE_SENSING_TIMEOUT, |wd| wd.min(ACTIVE_SENSING_TIMEOUT)));
+            }
+            if let Some(quiet) = quiet {
+                wake = wake.min_after(self.last_input, quiet);
             }
         }
-        next
+        // Each stored once (64-bit stores are dear on 8-bit MCUs).
+        self.wake = wake;
+        self.deadline = if busy { wake } else { self.due };
     }
 
     /// Runs the guard's timers at `now`: hold limits, the duty limit, delayed re-strikes, the
@@ -288,10 +412,39 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
 
     /// [`tick`](Self::tick), telling `sink` about delayed strikes that happen
     /// ([`NoteEvent::WaitOver`]) or are cancelled.
+    #[inline]
     pub fn tick_with<S: NoteSink>(&mut self, now: Instant, sink: &mut S) {
         self.advance(now);
+        // Nothing can be due before `wake`: one compare on every byte fed (inlined there; the
+        // timers' work is not).
+        if !self.wake.passed(self.clock) {
+            return;
+        }
+        self.run_due(sink);
+    }
+
+    /// [`tick_with`](Self::tick_with)'s work once `wake` has passed.
+    #[inline(never)]
+    fn run_due<S: NoteSink>(&mut self, sink: &mut S) {
+        self.run_timers(sink, false);
+        self.refresh();
+    }
+
+    /// [`tick`](Self::tick) the slow, straightforward way, as a reference for tests: no
+    /// early return before the kept deadlines, and every key visited. It must leave the
+    /// interpreter exactly as `tick` would. Not for use outside tests.
+    #[doc(hidden)]
+    pub fn tick_exhaustive_with<S: NoteSink>(&mut self, now: Instant, sink: &mut S) {
+        self.advance(now);
+        self.run_timers(sink, true);
+        self.refresh();
+    }
+
+    /// [`tick_with`](Self::tick_with)'s work once `wake` has passed; with `every_key`, ignores
+    /// `due` and the timed-key mask (the reference for tests).
+    fn run_timers<S: NoteSink>(&mut self, sink: &mut S, every_key: bool) {
         let now = self.clock;
-        let g = self.config.guard;
+        let g = &self.config.guard;
         if !g.enabled {
             return;
         }
@@ -302,66 +455,79 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         if starved {
             self.sensing = false;
             if busy {
-                self.stats.cut_by_watchdog += self.fingers.down as u32;
+                let down = self.fingers.down as u32;
+                self.count(|s| s.cut_by_watchdog += down);
                 self.release_everything(now, DropReason::Cancelled, sink);
             }
         }
-        if now < self.due {
+        if !self.due.passed(now) && !every_key {
             return;
         }
-        let mut due = NEVER;
-        for key in 0..self.keys() {
+        let g = &self.config.guard;
+        let hold = g.max_hold.map(Duration::as_micros);
+        let min_press = g.min_press.as_micros();
+        let gap = rest_us(g);
+        // The next per-key deadline, in µs from now.
+        let mut next: Option<u32> = None;
+        let mut soonest = |t: u32| next = Some(next.map_or(t, |n| n.min(t)));
+        // Only keys down or waiting have timers; a released key needs no visit (its rest is
+        // measured from its stamp when a note comes).
+        let mut from = 0;
+        loop {
+            let key = if every_key {
+                match (from < self.keys()).then_some(from) {
+                    Some(k) if !matches!(self.fingers.phase(k), DOWN | PENDING) => {
+                        from += 1;
+                        continue;
+                    }
+                    k => k,
+                }
+            } else {
+                self.fingers.next_timed(from)
+            };
+            let Some(key) = key else { break };
+            from = key + 1;
             let age = self.fingers.age(key, now);
-            match self.fingers.phase(key) {
-                DOWN => {
-                    let hold = g.max_hold.map(Duration::as_micros);
-                    let duty = self.duty_cut_after(key);
-                    let short = self.fingers.has(key, RELEASE_AFTER);
-                    if hold.is_some_and(|h| age >= h) {
-                        self.stats.cut_by_hold_limit += 1;
-                        self.forget_key(key);
-                        self.release_now(key, now);
-                    } else if duty.is_some_and(|d| age >= d) {
-                        self.stats.cut_by_duty_limit += 1;
-                        self.forget_key(key);
-                        self.release_now(key, now);
-                    } else if short && age >= g.min_press.as_micros() {
-                        self.release_now(key, now);
-                    } else {
-                        let mut limit = hold.unwrap_or(u32::MAX).min(duty.unwrap_or(u32::MAX));
-                        if short {
-                            limit = limit.min(g.min_press.as_micros());
-                        }
-                        if limit != u32::MAX {
-                            due = due.min(now + Duration::from_micros(limit - age));
-                        }
+            if self.fingers.phase(key) == DOWN {
+                let duty = self.duty_cut_after(key);
+                let short = self.fingers.has(key, RELEASE_AFTER);
+                if hold.is_some_and(|h| age >= h) {
+                    self.count(|s| s.cut_by_hold_limit += 1);
+                    self.forget_key(key);
+                    self.release_now(key, now);
+                } else if duty.is_some_and(|d| age >= d) {
+                    self.count(|s| s.cut_by_duty_limit += 1);
+                    self.forget_key(key);
+                    self.release_now(key, now);
+                } else if short && age >= min_press {
+                    self.release_now(key, now);
+                } else {
+                    let mut limit = hold.unwrap_or(u32::MAX).min(duty.unwrap_or(u32::MAX));
+                    if short {
+                        limit = limit.min(min_press);
+                    }
+                    if limit != u32::MAX {
+                        soonest(limit - age);
                     }
                 }
-                PENDING => {
-                    let gap = rest_us(&g);
-                    if age >= gap {
-                        let folded = self.fingers.has(key, FOLDED);
-                        self.count_sounded(folded);
-                        self.press_now(key, now);
-                        self.fingers.set_flag(key, LATE, true);
-                        sink.note(NoteEvent::WaitOver { key });
-                        let mut limit = g.max_hold.unwrap_or(Duration::MAX).as_micros();
-                        limit = limit.min(self.duty_cut_after(key).unwrap_or(u32::MAX));
-                        if self.fingers.has(key, RELEASE_AFTER) {
-                            limit = limit.min(g.min_press.as_micros());
-                        }
-                        due = due.min(now + Duration::from_micros(limit));
-                    } else {
-                        due = due.min(now + Duration::from_micros(gap - age));
-                    }
+            } else if age >= gap {
+                // PENDING: the rest is over, it strikes.
+                let folded = self.fingers.has(key, FOLDED);
+                self.count_sounded(folded);
+                self.press_now(key, now);
+                self.fingers.set_flag(key, LATE, true);
+                sink.note(NoteEvent::WaitOver { key });
+                let mut limit = hold.unwrap_or(u32::MAX);
+                limit = limit.min(self.duty_cut_after(key).unwrap_or(u32::MAX));
+                if self.fingers.has(key, RELEASE_AFTER) {
+                    limit = limit.min(min_press);
                 }
-                RELEASING if age >= rest_us(&g) => {
-                    self.fingers.set_phase(key, READY);
-                }
-                _ => {}
+                soonest(limit);
+            } else {
+                soonest(gap - age);
             }
         }
-        self.due = due;
+        self.due = next.map_or(Kept::NEVER, |n| Kept::new(now + Duration::from_micros(n)));
     }
 
     fn keys(&self) -> u8 {
@@ -369,32 +535,54 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     }
 
     /// Moves the clock to `now` (never back) and keeps per-key ages from wrapping.
+    #[inline(always)]
     fn advance(&mut self, now: Instant) {
         if now <= self.clock {
             return;
         }
         let before = self.clock;
-        let jump = now.saturating_since(before);
         self.clock = now;
+        // `clamped` <= `before` < `now`: no wrap.
+        if now.as_micros().wrapping_sub(self.clamped.as_micros()) >= CLAMP_EVERY {
+            self.clamp_ages(before, now);
+        }
+    }
+
+    /// Keeps per-key ages from wrapping, when the clock moved from `before` to `now` past a
+    /// multiple of 2³⁰ µs.
+    #[cold]
+    #[inline(never)]
+    fn clamp_ages(&mut self, before: Instant, now: Instant) {
         // Ages are clamped well before they could wrap: whenever the clock jumps by at least
-        // the cap (everything is old), and at least once every cap/2 of clock time. Ages can
-        // be up to 1.5 × cap just before a clamp, so a jump of up to a cap on top of that
-        // would wrap 32 bits: clamp at the time before the jump first.
-        if jump >= AGE_CAP as u64 {
+        // the cap (everything is old), and at least once every cap/2 of clock time (when it
+        // passes a multiple of 2³⁰ µs). Ages can be up to 1.5 × cap just before a clamp, so a
+        // jump of up to a cap on top of that would wrap 32 bits: clamp at the time before the
+        // jump first.
+        if now.saturating_since(before) >= AGE_CAP as u64 {
             self.fingers.clamp_ages(now, true);
-        } else if (now.as_micros() >> 30) != (before.as_micros() >> 30) {
+        } else {
             self.fingers.clamp_ages(before, false);
             self.fingers.clamp_ages(now, false);
+        }
+        self.clamped = Instant::from_micros(now.as_micros() & !(CLAMP_EVERY - 1));
+    }
+
+    /// The duty limit, if any. Always `None` without the `duty-limit` feature (a configuration
+    /// with one is refused then), so its arithmetic (64-bit multiplications and divisions, 4 KB
+    /// of AVR code) is left out of the build.
+    #[inline(always)]
+    fn duty(&self) -> Option<DutyLimit> {
+        if cfg!(feature = "duty-limit") {
+            self.config.guard.duty
+        } else {
+            None
         }
     }
 
     /// How long after its press the duty limit cuts `key` (down), from its heat at the
     /// press; `None` without a duty limit.
     fn duty_cut_after(&self, key: u8) -> Option<u32> {
-        if !cfg!(feature = "duty-limit") {
-            return None;
-        }
-        let d = self.config.guard.duty?;
+        let d = self.duty()?;
         let (on, window) = (d.max_on.as_micros() as u64, d.window.as_micros() as u64);
         if on >= window {
             return None;
@@ -453,7 +641,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         now: Instant,
         sink: &mut S,
     ) {
-        self.stats.note_ons += 1;
+        self.count(|s| s.note_ons += 1);
         let drop = |sink: &mut S, at: Option<Landing>, reason| {
             sink.note(NoteEvent::Dropped {
                 channel,
@@ -463,21 +651,21 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             })
         };
         if !self.config.channels.contains(channel) {
-            self.stats.dropped_channel += 1;
+            self.count(|s| s.dropped_channel += 1);
             drop(sink, None, DropReason::Channel);
             return;
         }
         let Some(KeyOf { key, octaves }) =
             self.config.range.key_for(note, self.config.out_of_range)
         else {
-            self.stats.dropped_range += 1;
+            self.count(|s| s.dropped_range += 1);
             drop(sink, None, DropReason::Range);
             return;
         };
         let at = Landing { key, octaves };
         let folded = octaves != 0;
         if folded {
-            self.stats.folded_octaves += octaves.unsigned_abs() as u32;
+            self.count(|s| s.folded_octaves += octaves.unsigned_abs() as u32);
         }
         let g = self.config.guard;
         let repeated = self.notes.contains(channel, note);
@@ -494,7 +682,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             // Another note holds the key already: this one joins it.
             if self.notes.insert(channel, note, key) {
                 self.count_sounded(folded);
-                self.stats.joined += 1;
+                self.count(|s| s.joined += 1);
                 sink.note(NoteEvent::Joined {
                     channel,
                     note,
@@ -502,7 +690,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
                     with_strike,
                 });
             } else {
-                self.stats.dropped_power += 1;
+                self.count(|s| s.dropped_power += 1);
                 drop(sink, Some(at), DropReason::Power);
             }
             return;
@@ -512,7 +700,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         let over_budget =
             !busy && g.enabled && self.fingers.down + self.fingers.pending >= g.max_keys_down;
         if over_budget {
-            self.stats.dropped_power += 1;
+            self.count(|s| s.dropped_power += 1);
             drop(sink, Some(at), DropReason::Power);
             return;
         }
@@ -525,18 +713,18 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         };
         if g.late_limit.is_some_and(|l| wait > l.as_micros()) {
             // It could not sound within the late limit: the key stays as it is.
-            self.stats.dropped_too_fast += 1;
+            self.count(|s| s.dropped_too_fast += 1);
             drop(sink, Some(at), DropReason::TooFast);
             return;
         }
         if !self.notes.insert(channel, note, key) {
-            self.stats.dropped_power += 1;
+            self.count(|s| s.dropped_power += 1);
             drop(sink, Some(at), DropReason::Power);
             return;
         }
         if phase == PENDING {
             // Still waiting: the earlier note's strike is taken over by this note.
-            self.stats.dropped_cancelled += 1;
+            self.count(|s| s.dropped_cancelled += 1);
             sink.note(NoteEvent::WaitEnded {
                 key,
                 reason: DropReason::Cancelled,
@@ -612,7 +800,10 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     fn release_everything<S: NoteSink>(&mut self, now: Instant, why: DropReason, sink: &mut S) {
         self.notes.clear();
         self.pedals = 0;
-        for key in 0..self.keys() {
+        // Only keys down or waiting have anything to release or cancel.
+        let mut from = 0;
+        while let Some(key) = self.fingers.next_timed(from) {
+            from = key + 1;
             self.cancel_key(key, now, why, sink);
         }
         self.frame.clear();
@@ -647,7 +838,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
             let wait = rest_us(&g) - self.fingers.age(key, now);
             self.fingers.set_phase(key, PENDING);
             self.fingers.set_flag(key, FOLDED, folded);
-            self.stats.restrikes_delayed += 1;
+            self.count(|s| s.restrikes_delayed += 1);
             self.due = self.due.min(now + Duration::from_micros(wait));
             false
         } else {
@@ -666,15 +857,14 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
 
     fn count_sounded(&mut self, folded: bool) {
         if folded {
-            self.stats.folded += 1;
+            self.count(|s| s.folded += 1);
         } else {
-            self.stats.played += 1;
+            self.count(|s| s.played += 1);
         }
     }
 
     fn press_now(&mut self, key: u8, now: Instant) {
-        #[cfg(feature = "duty-limit")]
-        if let Some(d) = self.config.guard.duty {
+        if let Some(d) = self.duty() {
             // The key cooled at the duty while it was up.
             let up = self.fingers.age(key, now) as u64;
             let cooled = up * d.max_on.as_micros() as u64 / d.window.as_micros().max(1) as u64;
@@ -686,7 +876,8 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         if let Some(f) = self.config.layout.finger(key) {
             self.frame.set(f.board, f.bit, true);
         }
-        self.stats.peak_keys_down = self.stats.peak_keys_down.max(self.fingers.down);
+        let down = self.fingers.down;
+        self.count(|s| s.peak_keys_down = s.peak_keys_down.max(down));
     }
 
     /// Lets `key` go because its notes ended. A strike that has not reached the boards yet
@@ -724,8 +915,7 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
     /// Releases `key` now if it is down.
     fn release_now(&mut self, key: u8, now: Instant) {
         if self.fingers.phase(key) == DOWN {
-            #[cfg(feature = "duty-limit")]
-            if let Some(d) = self.config.guard.duty {
+            if let Some(d) = self.duty() {
                 // It heated at (1 − duty) while it was down; rounded up, to be safe.
                 let (on, window) = (d.max_on.as_micros() as u64, d.window.as_micros() as u64);
                 let down = self.fingers.age(key, now) as u64;
@@ -745,9 +935,9 @@ impl<const B: usize, const K: usize, H: HeldNotes> Interpreter<B, K, H> {
         if self.fingers.phase(key) == PENDING {
             // It never struck: it keeps resting from its earlier release.
             if why == DropReason::Stopped {
-                self.stats.dropped_stopped += 1;
+                self.count(|s| s.dropped_stopped += 1);
             } else {
-                self.stats.dropped_cancelled += 1;
+                self.count(|s| s.dropped_cancelled += 1);
             }
             sink.note(NoteEvent::WaitEnded { key, reason: why });
             self.fingers.set_phase(key, RELEASING);
@@ -785,6 +975,7 @@ mod tests {
         let mut i = Interpreter::<4, 61, NotePool<2>>::new(config).unwrap();
         i.feed_slice(&[0x90, 60, 1, 61, 1, 62, 1], Instant::ZERO);
         assert_eq!(i.keys_down(), 2);
+        #[cfg(feature = "stats")]
         assert_eq!(i.stats().dropped_power, 1);
         i.feed_slice(&[0x80, 62, 0, 60, 0], Instant::ZERO);
         assert_eq!(i.keys_down(), 1);

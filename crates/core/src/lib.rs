@@ -10,6 +10,9 @@
 //! - [`Interpreter`]: decoded messages plus the current time in, a [`FingerFrame`] out. Maps
 //!   notes to keys ([`KeyRange`], [`OutOfRange`]) and keys to fingers ([`Layout`]), keeps track
 //!   of which notes hold each key, and runs the safety guard ([`GuardConfig`]).
+//! - [`ConfigSource`]: where the interpreter finds its [`Config`]: in itself (any configuration,
+//!   chosen at run time), or in a constant such as [`Thesis`] (no RAM, and the compiler folds
+//!   it into the code: for MCUs).
 //! - [`HeldNotes`]: where the interpreter records which notes are on ([`NoteTable`] on hosts,
 //!   [`NotePool`] on small MCUs).
 //! - [`NoteEvent`]: what became of each note (struck, waiting, joined, dropped and why),
@@ -40,16 +43,19 @@
 //!
 //! | part | bytes |
 //! |---|---|
-//! | the 61 keys' phase, 32-bit timestamp and velocity (the guard's memory) | 366 |
+//! | the 61 keys' phase, 32-bit timestamp and velocity (the guard's memory), and the 16-byte mask of keys whose timers run | 384 |
 //! | the 61 keys' heat for the duty limit (feature `duty-limit`, off on the ATmega16) | 122 (+6 padding) |
 //! | held notes, [`NotePool<32>`](NotePool) (for MCUs: 32 notes played or sustained at once, twice the power budget) | 97 |
 //! | held notes, [`NoteTable`] (the default: every channel of every note, played and sustained, exact under any load) | 512 |
-//! | configuration 68, counters 64, frame 16, decoder 28, clock and pedals 32 | ≈ 200 |
-//! | **`Interpreter<4, 61, NotePool<32>>` without `duty-limit`: the ATmega16 build** | **672** |
-//! | **[`Interpreter`] with [`NoteTable`] and the duty limit: the host's** | **1208** |
+//! | frame 16, decoder 28, clock, last input, kept deadlines and pedals 51 | ≈ 100 |
+//! | the configuration (none with a constant one: [`Thesis`]) | 68 |
+//! | the statistics (feature `stats`, off on the ATmega16) | 64 |
+//! | `Interpreter<4, 61, NotePool<32>>` without `duty-limit` and `stats` | 648 |
+//! | **`Interpreter<4, 61, NotePool<32>, Thesis>` without `duty-limit` and `stats`: the ATmega16 build** | **584** |
+//! | **[`Interpreter`] with [`NoteTable`], the duty limit and the statistics: the host's** | **1248** |
 //!
-//! AVR has no padding, so the ATmega16 figure is a few bytes lower. The [`Decoder`] alone
-//! takes 28 bytes.
+//! AVR has no padding, so the ATmega16 figure is a few bytes lower (575). The [`Decoder`]
+//! alone takes 28 bytes.
 //!
 //! ## Cargo features
 //!
@@ -58,6 +64,10 @@
 //! - `duty-limit` (default): the guard's per-key duty limit ([`DutyLimit`]), 2 bytes of RAM a
 //!   key. The ATmega16 firmware builds without it (its 1 KB of SRAM has no room); its hold
 //!   limit and watchdog still apply.
+//! - `stats` (default): [`Interpreter::stats`] counts what became of the notes ([`Stats`],
+//!   64 bytes of RAM and the code that counts). Without it every count reads 0; the
+//!   [`NoteEvent`]s, which carry the same account note by note, are unchanged. The ATmega16
+//!   firmware builds without it.
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -77,7 +87,9 @@ mod stats;
 mod time;
 mod values;
 
-pub use config::{Config, ConfigError, DutyLimit, GuardConfig, Overlap, MAX_LIMIT};
+pub use config::{
+    Config, ConfigError, ConfigSource, DutyLimit, GuardConfig, Overlap, Thesis, MAX_LIMIT,
+};
 pub use decoder::{Counters, Decoded, Decoder};
 pub use frame::{FingerFrame, FlushError};
 pub use held::{HeldNotes, NotePool, NoteTable};

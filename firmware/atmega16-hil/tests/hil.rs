@@ -8,9 +8,9 @@
 use orch_atmega16_hil::*;
 
 /// The latest a press or release may reach its board after the host made it. A write takes
-/// 456 µs at 83.33 kHz, but the firmware runs orch-core's guard timers by scanning all 61
-/// keys (10 000–20 000 cycles, 1.3–2.7 ms at 8 MHz) and under a full-rate flood bytes and
-/// writes wait behind such a scan; 6 ms is 19 DIN bytes.
+/// 456 µs at 83.33 kHz, but under a full-rate flood bytes, the guard's timers (each a visit of
+/// the keys down or waiting) and the writes they make queue behind each other: at most
+/// 2.3 ms measured; 6 ms is 19 DIN bytes.
 const MAX_LATE_US: u64 = 6_000;
 
 /// Plays `stream` into a booted robot, one byte every `pace_us`, and the same bytes at the
@@ -360,7 +360,7 @@ fn a_full_rate_din_line_loses_no_press_or_release() {
         m.releases
     );
     // Half of them within one byte and one board write (456 µs at 83.33 kHz) of the host's;
-    // the rest wait behind orch-core's guard scans (MAX_LATE_US).
+    // the rest wait behind other bytes, guard timers and writes (MAX_LATE_US).
     assert!(
         m.percentile(50) <= SIM_BYTE_US + 456,
         "median lateness {} µs",

@@ -3,8 +3,9 @@
 //! - MIDI in on the UART at 31250 baud (UBRR 15), by interrupt into a ring buffer; every byte
 //!   is sent on at once on the UART's TX pin (soft MIDI thru), as the thesis's board passed
 //!   its stream on to the flute robot.
-//! - orch-core's decoder, interpreter and safety guard (`Interpreter<4, 61, NotePool<32>>`,
-//!   the thesis's keyboard), with time from Timer1 (1 µs ticks).
+//! - orch-core's decoder, interpreter and safety guard (`Interpreter<4, 61, NotePool<32>,
+//!   Thesis>`: the thesis's keyboard and configuration, as constants), with time from Timer1
+//!   (1 µs ticks).
 //! - The four PCA9555 finger boards at 0x21..=0x24 on the TWI (83.33 kHz, as in the thesis),
 //!   interrupt-driven: writes are queued and go out while the main loop decodes the next
 //!   bytes, with timeouts, bus recovery and retries. A board is written only when its bits
@@ -27,12 +28,12 @@ use core::convert::Infallible;
 use core::ptr::addr_of_mut;
 
 use avr_device::atmega16::Peripherals;
-use orch_core::{BoardId, FingerBoards, Instant, Interpreter, NotePool};
+use orch_core::{BoardId, FingerBoards, Instant, Interpreter, NotePool, Thesis};
 
 /// How often boards that failed are initialised and written again.
 const RETRY_US: u64 = 10_000;
 
-type Robot = Interpreter<4, 61, NotePool<32>>;
+type Robot = Interpreter<4, 61, NotePool<32>, Thesis>;
 
 /// The boards as the interpreter's frame sees them: each write is queued for the TWI handler
 /// (the frame takes it as written). A board set aside after failing [`twi::ATTEMPTS`] times
@@ -61,9 +62,11 @@ fn init_board(board: u8, outputs: u16) {
     }
 }
 
-/// The interpreter (about 630 bytes) lives in a static built at compile time: built at run
-/// time it would pass through the stack, twice its size in 1 KB of SRAM.
-static mut ROBOT: Robot = Robot::thesis_with();
+/// The interpreter (575 bytes) lives in a static built at compile time: built at run time it
+/// would pass through the stack, twice its size in 1 KB of SRAM. With the configuration a
+/// constant ([`Thesis`]) its initial state is all zero bits, so it sits in `.bss`: no flash for
+/// an initial copy.
+static mut ROBOT: Robot = Robot::thesis_fixed();
 
 #[avr_device::entry]
 fn main() -> ! {
