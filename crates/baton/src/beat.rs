@@ -22,17 +22,21 @@
 //! y and x interpolated at its time.
 //!
 //! ## The tempo
-//! The last [`BeatParams::window`] beats give their intervals. The reference is the median of
-//! the last three; an interval more than [`BeatParams::outlier`] (as a fraction) away from it
-//! is an outlier and is ignored: a missed beat (twice the interval), an invented one (two
-//! short ones), and the long interval of a **fermata** (the baton held, then a new
-//! preparation: the held interval is ignored, the tempo before it stands, and the beat after
-//! it is reported at that tempo; the phase starts again at that beat). A sudden real change of
-//! tempo wins once two of the last three intervals agree on it. The tempo at a beat is
+//! The last [`BeatParams::window`] beats give their intervals. The reference is the period
+//! estimated at the previous beat (the median of the last three intervals before there is
+//! one, or when none of them agrees with it); an interval more than [`BeatParams::outlier`]
+//! (as a fraction) away from it is an outlier and is ignored: a missed beat (twice the
+//! interval), an invented one (two short ones), and the long interval of a **fermata** (the
+//! baton held, then a new preparation: the held interval is ignored, the tempo before it
+//! stands, and the beat after it is reported at that tempo; the phase starts again at that
+//! beat). A sudden real change of tempo wins as soon as the last two intervals agree with
+//! each other and not with the reference: their mean becomes the reference. The tempo at a beat is
 //! 60 000 / (mean of the inlier intervals among the last [`BeatParams::average`]) and, when
 //! [`BeatParams::trend`] is on and at least four inliers are there, the trend of the
 //! intervals (a least-squares line through them against time) carried forward to the beat, so
-//! an accelerando or a ritardando is followed without a lag of half the window.
+//! an accelerando or a ritardando is followed without a lag of half the window; the result is
+//! kept within the range of those latest intervals widened by their last step, so a sudden
+//! change of tempo is not extrapolated as a trend.
 
 use std::collections::VecDeque;
 
@@ -49,7 +53,10 @@ pub struct BeatParams {
     pub window: usize,
     /// Inlier intervals averaged for the tempo (the latest ones). Default 4.
     pub average: usize,
-    /// An interval further than this fraction from the reference is an outlier. Default 0.3.
+    /// An interval further than this fraction from the reference is an outlier. Default
+    /// 0.12: a player's beat-to-beat wobble (a few %) and an accelerando's step (2–3 % a
+    /// beat) stay in; a missed beat (+100 %), an invented one (−50 %), a fermata and a sudden
+    /// change of tempo (until it is confirmed) stay out.
     pub outlier: f64,
     /// Follow a changing tempo by the intervals' trend. Default on.
     pub trend: bool,
@@ -63,7 +70,7 @@ impl Default for BeatParams {
             min_interval_ms: 150.0,
             window: 8,
             average: 4,
-            outlier: 0.3,
+            outlier: 0.12,
             trend: true,
         }
     }
@@ -98,6 +105,7 @@ pub struct BeatDetector {
     top: Option<f64>,
     bottom: Option<usize>,
     beats: VecDeque<f64>,
+    period: Option<f64>,
 }
 
 impl BeatDetector {
@@ -149,6 +157,7 @@ impl BeatDetector {
                     while self.beats.len() > self.params.window {
                         self.beats.pop_front();
                     }
+                    self.period = self.estimate().or(self.period);
                     beat = Some(Beat {
                         t_ms: t,
                         bpm: self.bpm(),
@@ -286,8 +295,13 @@ impl BeatDetector {
         (s[b].t, s[b].y)
     }
 
-    /// The tempo now, from the beats so far (see the [module notes](self)).
+    /// The tempo now, BPM (as estimated at the last beat; see the [module notes](self)).
     pub fn bpm(&self) -> Option<f64> {
+        self.period.map(|p| 60_000.0 / p)
+    }
+
+    /// The period estimated from the beats so far, ms.
+    fn estimate(&self) -> Option<f64> {
         let times: Vec<f64> = self.beats.iter().copied().collect();
         if times.len() < 2 {
             return None;
@@ -296,12 +310,29 @@ impl BeatDetector {
             .windows(2)
             .map(|w| ((w[0] + w[1]) / 2.0, w[1] - w[0]))
             .collect();
+        let band = self.params.outlier;
+        let agree = |a: f64, b: f64| (a / b - 1.0).abs() <= band;
         let recent: Vec<f64> = intervals.iter().rev().take(3).map(|i| i.1).collect();
-        let reference = median(&recent);
+        let reference = match self.period {
+            Some(p) => {
+                let last_two_moved = recent.len() >= 2
+                    && agree(recent[0], recent[1])
+                    && !agree(recent[0], p)
+                    && !agree(recent[1], p);
+                if last_two_moved {
+                    (recent[0] + recent[1]) / 2.0
+                } else if recent.iter().any(|&r| agree(r, p)) {
+                    p
+                } else {
+                    median(&recent)
+                }
+            }
+            None => median(&recent),
+        };
         let inliers: Vec<(f64, f64)> = intervals
             .iter()
             .copied()
-            .filter(|&(_, d)| (d / reference - 1.0).abs() <= self.params.outlier)
+            .filter(|&(_, d)| agree(d, reference))
             .collect();
         if inliers.is_empty() {
             return None;
@@ -323,10 +354,19 @@ impl BeatDetector {
             let std: f64 = inliers.iter().map(|i| (i.0 - mt) * (i.1 - md)).sum();
             if stt > 0.0 {
                 let slope = std / stt;
-                period = md + slope * (now - mt);
+                // Never past the latest intervals by more than their last step: a sudden
+                // change of tempo is not a trend to extrapolate.
+                let lo = last.iter().map(|i| i.1).fold(f64::INFINITY, f64::min);
+                let hi = last.iter().map(|i| i.1).fold(0.0, f64::max);
+                let step = if last.len() >= 2 {
+                    (last[0].1 - last[1].1).abs()
+                } else {
+                    0.0
+                };
+                period = (md + slope * (now - mt)).clamp(lo - step, hi + step);
             }
         }
-        (period > 0.0).then(|| 60_000.0 / period)
+        (period > 0.0).then_some(period)
     }
 
     /// When the next beat is due at the present tempo, ms: the phase. `None` before two beats.
