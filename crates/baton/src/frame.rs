@@ -60,30 +60,35 @@ impl Frame {
         self.height = height;
         self.rgb.resize(3 * width * height, 0);
         let mono = cb.is_empty() || cr.is_empty() || cw == 0 || ch == 0;
-        for row in 0..height {
-            let crow = if mono {
-                0
-            } else {
-                (row * ch / height).min(ch - 1)
-            };
-            for col in 0..width {
-                let luma = y_plane[row * width + col] as i32;
-                let (u, v) = if mono {
-                    (128, 128)
+        // Which chroma column each pixel column reads.
+        let ccol: Vec<usize> = (0..width)
+            .map(|col| {
+                if mono {
+                    0
                 } else {
-                    let ccol = (col * cw / width).min(cw - 1);
-                    (cb[crow * cw + ccol] as i32, cr[crow * cw + ccol] as i32)
-                };
-                let c = 298 * (luma - 16);
-                let d = u - 128;
-                let e = v - 128;
-                let r = (c + 409 * e + 128) >> 8;
-                let g = (c - 100 * d - 208 * e + 128) >> 8;
-                let b = (c + 516 * d + 128) >> 8;
-                let i = 3 * (row * width + col);
-                self.rgb[i] = r.clamp(0, 255) as u8;
-                self.rgb[i + 1] = g.clamp(0, 255) as u8;
-                self.rgb[i + 2] = b.clamp(0, 255) as u8;
+                    (col * cw / width).min(cw - 1)
+                }
+            })
+            .collect();
+        for (row, (out, luma)) in self
+            .rgb
+            .chunks_exact_mut(3 * width)
+            .zip(y_plane.chunks_exact(width))
+            .enumerate()
+        {
+            let (cb_row, cr_row): (&[u8], &[u8]) = if mono {
+                (&[128], &[128])
+            } else {
+                let crow = (row * ch / height).min(ch - 1);
+                (&cb[crow * cw..][..cw], &cr[crow * cw..][..cw])
+            };
+            for ((px, &l), &c) in out.chunks_exact_mut(3).zip(luma).zip(&ccol) {
+                let c298 = 298 * (i32::from(l) - 16);
+                let d = i32::from(cb_row[c]) - 128;
+                let e = i32::from(cr_row[c]) - 128;
+                px[0] = ((c298 + 409 * e + 128) >> 8).clamp(0, 255) as u8;
+                px[1] = ((c298 - 100 * d - 208 * e + 128) >> 8).clamp(0, 255) as u8;
+                px[2] = ((c298 + 516 * d + 128) >> 8).clamp(0, 255) as u8;
             }
         }
     }
@@ -94,26 +99,31 @@ impl Frame {
         let (w, h) = (self.width, self.height);
         let (cw, ch) = (w.div_ceil(2), h.div_ceil(2));
         let mut yp = vec![0u8; w * h];
-        let mut sums = vec![[0i32; 3]; cw * ch];
-        let mut counts = vec![0i32; cw * ch];
-        for row in 0..h {
-            for col in 0..w {
-                let [r, g, b] = self.pixel(col, row).map(i32::from);
-                yp[row * w + col] = (((66 * r + 129 * g + 25 * b + 128) >> 8) + 16) as u8;
-                let c = (row / 2) * cw + col / 2;
-                sums[c][0] += r;
-                sums[c][1] += g;
-                sums[c][2] += b;
-                counts[c] += 1;
+        let mut sums = vec![[0i32; 4]; cw * ch];
+        for (row, (pixels, luma)) in self
+            .rgb
+            .chunks_exact(3 * w)
+            .zip(yp.chunks_exact_mut(w))
+            .enumerate()
+        {
+            let crow = &mut sums[(row / 2) * cw..][..cw];
+            for (col, (px, l)) in pixels.chunks_exact(3).zip(luma).enumerate() {
+                let (r, g, b) = (i32::from(px[0]), i32::from(px[1]), i32::from(px[2]));
+                *l = (((66 * r + 129 * g + 25 * b + 128) >> 8) + 16) as u8;
+                let s = &mut crow[col / 2];
+                s[0] += r;
+                s[1] += g;
+                s[2] += b;
+                s[3] += 1;
             }
         }
         let mut cb = vec![0u8; cw * ch];
         let mut cr = vec![0u8; cw * ch];
-        for c in 0..cw * ch {
-            let n = counts[c].max(1);
-            let [r, g, b] = sums[c].map(|s| (s + n / 2) / n);
-            cb[c] = (((-38 * r - 74 * g + 112 * b + 128) >> 8) + 128).clamp(0, 255) as u8;
-            cr[c] = (((112 * r - 94 * g - 18 * b + 128) >> 8) + 128).clamp(0, 255) as u8;
+        for ((s, b), r) in sums.iter().zip(&mut cb).zip(&mut cr) {
+            let n = s[3].max(1);
+            let [rr, gg, bb] = [s[0], s[1], s[2]].map(|v| (v + n / 2) / n);
+            *b = (((-38 * rr - 74 * gg + 112 * bb + 128) >> 8) + 128).clamp(0, 255) as u8;
+            *r = (((112 * rr - 94 * gg - 18 * bb + 128) >> 8) + 128).clamp(0, 255) as u8;
         }
         (yp, cb, cr)
     }
