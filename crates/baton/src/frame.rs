@@ -82,6 +82,24 @@ impl Frame {
                 let crow = (row * ch / height).min(ch - 1);
                 (&cb[crow * cw..][..cw], &cr[crow * cw..][..cw])
             };
+            if !mono && cw == width.div_ceil(2) {
+                // Each chroma sample serves two pixels: its terms once for both.
+                for ((pair, lumas), (&u, &v)) in out
+                    .chunks_mut(6)
+                    .zip(luma.chunks(2))
+                    .zip(cb_row.iter().zip(cr_row))
+                {
+                    let (d, e) = (i32::from(u) - 128, i32::from(v) - 128);
+                    let (rc, gc, bc) = (409 * e + 128, -100 * d - 208 * e + 128, 516 * d + 128);
+                    for (px, &l) in pair.chunks_exact_mut(3).zip(lumas) {
+                        let c298 = 298 * (i32::from(l) - 16);
+                        px[0] = ((c298 + rc) >> 8).clamp(0, 255) as u8;
+                        px[1] = ((c298 + gc) >> 8).clamp(0, 255) as u8;
+                        px[2] = ((c298 + bc) >> 8).clamp(0, 255) as u8;
+                    }
+                }
+                continue;
+            }
             for ((px, &l), &c) in out.chunks_exact_mut(3).zip(luma).zip(&ccol) {
                 let c298 = 298 * (i32::from(l) - 16);
                 let d = i32::from(cb_row[c]) - 128;
