@@ -22,12 +22,15 @@ fn spot(x: f64, y: f64) -> Frame {
 fn centroid_is_sub_pixel() {
     let mut d = Detector::new(DetectParams::default());
     let mut blobs = Vec::new();
-    for (x, y) in [(40.0, 30.0), (80.3, 50.7), (100.5, 70.25), (20.9, 99.1)] {
+    // A sweep in tenths of a pixel: the thresholded shape moves in whole pixels, the
+    // redness-weighted centroid moves smoothly.
+    for k in 0..=20 {
+        let (x, y) = (80.0 + 0.1 * k as f64, 50.0 + 0.05 * k as f64);
         d.detect(&spot(x, y), &mut blobs);
         assert_eq!(blobs.len(), 1);
         let b = blobs[0];
         assert!(
-            (b.x - x).abs() < 0.08 && (b.y - y).abs() < 0.08,
+            (b.x - x).abs() < 0.03 && (b.y - y).abs() < 0.03,
             "({x}, {y}) found at ({}, {})",
             b.x,
             b.y
@@ -202,5 +205,39 @@ fn a_wobble_or_a_baton_held_still_makes_no_beat() {
         let t = i as f64 * 1000.0 / 60.0;
         let y = 200.0 + 6.0 * (t / 90.0).sin() + 1.5 * rng.normal();
         assert_eq!(d.push(t, 0.0, y), None, "at {t}");
+    }
+}
+
+#[test]
+fn one_sample_after_the_bottom_is_enough_when_the_rest_are_lost() {
+    // A sharp V whose rebound leaves the picture (seen only while y ≥ 190): one sample after
+    // each bottom, then nothing until the next downstroke comes back in.
+    let ictus: Vec<f64> = (0..8).map(|k| 500.0 + 600.0 * k as f64).collect();
+    let path = |t: f64| {
+        let k = ictus.partition_point(|&i| i <= t);
+        let after = if k == 0 {
+            f64::INFINITY
+        } else {
+            t - ictus[k - 1]
+        };
+        let before = ictus.get(k).map_or(f64::INFINITY, |&i| i - t);
+        (300.0 - 3.0 * after).max(300.0 - 1.5 * before)
+    };
+    let mut d = BeatDetector::new(BeatParams::default());
+    let mut found = Vec::new();
+    for i in 0..160 {
+        let t = i as f64 * 1000.0 / 30.0;
+        let y = path(t);
+        if y >= 190.0 {
+            found.extend(d.push(t, 0.0, y));
+        }
+    }
+    assert_eq!(found.len(), ictus.len(), "{found:#?}");
+    for (b, &i) in found.iter().zip(&ictus) {
+        assert!(
+            (b.t_ms - i).abs() < 1000.0 / 30.0,
+            "{} vs {i}: {found:?}",
+            b.t_ms
+        );
     }
 }

@@ -4,7 +4,7 @@
 //! runs in release: `cargo test -p orch-baton --release -- --ignored` (scripts/test.sh does).
 
 use orch_baton::synth::{self, Script, Video};
-use orch_baton::Params;
+use orch_baton::{Baton, Blob, Params};
 
 fn check_all(scripts: &[Script]) {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
@@ -43,31 +43,50 @@ fn light_set_meets_the_bars() {
     ]);
 }
 
-/// The beat detector and the tempo estimator alone, on the exact path of every video of the
-/// suite at both rates (sampled at the delivered frames where the LED shows): no drawing, so
-/// it is quick in debug, and it checks the same bars.
+fn blob(x: f64, y: f64, area: u32, half: f64, peak: u8) -> Blob {
+    Blob {
+        x,
+        y,
+        area,
+        weight: f64::from(area) * f64::from(peak),
+        peak,
+        bbox: [
+            (x - half).max(0.0) as u16,
+            (y - half).max(0.0) as u16,
+            (x + half) as u16,
+            (y + half) as u16,
+        ],
+    }
+}
+
+/// The tracker, the beat detector and the tempo estimator, on the exact path of every video
+/// of the suite at both rates: each delivered frame gives the blobs a perfect detector would
+/// (the LED where it shows, in the picture and not hidden; with `second_red`, the sleeve and
+/// the standby light too). No drawing, so it is quick in debug; it checks the same bars.
 #[test]
-fn beats_and_tempo_on_every_path_meet_the_bars() {
+fn tracker_and_beats_on_every_path_meet_the_bars() {
     let mut failures = Vec::new();
     for fps in [30.0, 60.0] {
         for script in synth::suite(fps) {
-            let occlude = script.occlude;
+            let (occlude, second_red) = (script.occlude, script.second_red);
             let video = Video::new(script.noise(0.0));
-            let mut beats = orch_baton::BeatDetector::new(Default::default());
+            let mut baton = Baton::default();
             let mut rng = synth::Rng::new(11);
             let mut found = Vec::new();
             let mut frames = 0;
             for i in (0..video.frame_count()).filter(|&i| !video.dropped(i)) {
                 frames += 1;
-                if rng.unit() < occlude {
-                    continue;
-                }
                 let t = i as f64 * 1000.0 / fps;
                 let (x, y) = video.led_at(t);
-                if !(0.0..480.0).contains(&y) {
-                    continue; // out of the picture
+                let mut blobs = Vec::new();
+                if rng.unit() >= occlude && (0.0..480.0).contains(&y) {
+                    blobs.push(blob(x, y, 60, 4.0, 200));
                 }
-                found.extend(beats.push(t, x, y));
+                if second_red {
+                    blobs.push(blob(x + 75.0, y + 125.0, 2200, 30.0, 170));
+                    blobs.push(blob(90.0, 440.0, 20, 2.0, 130));
+                }
+                found.extend(baton.push_blobs(t, &blobs));
             }
             let score = synth::score(&video, &found, frames);
             println!("{}", score.row());
