@@ -46,7 +46,7 @@ fn json_lines_one_per_beat_at_the_true_ictus() {
         assert_eq!(keys, ["t_ms", "bpm", "x", "y"]);
         let t = v["t_ms"].as_f64().unwrap();
         assert!(
-            (t - truth.t_ms).abs() < 1000.0 / 30.0 + 10.0,
+            (t - truth.t_ms).abs() < 15.0, // the suite's p95 at 30 fps is under 8 ms
             "{line} vs {truth:?}"
         );
         assert!(
