@@ -267,6 +267,27 @@ impl FrameSource for PngFolder {
 pub struct FfmpegSource {
     child: Child,
     inner: Y4mSource<BufReader<ChildStdout>>,
+    stderr: Option<std::thread::JoinHandle<String>>,
+    path: PathBuf,
+}
+
+/// Reads a child's stderr on a thread (so a chatty ffmpeg never blocks on a full pipe),
+/// keeping its last 4 KB.
+fn drain(mut err: std::process::ChildStderr) -> std::thread::JoinHandle<String> {
+    std::thread::spawn(move || {
+        let mut kept: Vec<u8> = Vec::new();
+        let mut buf = [0u8; 4096];
+        while let Ok(n) = err.read(&mut buf) {
+            if n == 0 {
+                break;
+            }
+            kept.extend_from_slice(&buf[..n]);
+            if kept.len() > 4096 {
+                kept.drain(..kept.len() - 4096);
+            }
+        }
+        String::from_utf8_lossy(&kept).trim().to_string()
+    })
 }
 
 impl FfmpegSource {
@@ -298,22 +319,21 @@ impl FfmpegSource {
             .stdout
             .take()
             .ok_or_else(|| bad("ffmpeg gave no output"))?;
+        let stderr = child.stderr.take().map(drain);
         match Y4mSource::new(BufReader::new(stdout), fps) {
-            Ok(inner) => Ok(Self { child, inner }),
+            Ok(inner) => Ok(Self {
+                child,
+                inner,
+                stderr,
+                path: path.to_path_buf(),
+            }),
             Err(e) => {
-                let mut msg = String::new();
-                if let Some(mut err) = child.stderr.take() {
-                    let _ = err.read_to_string(&mut msg);
-                }
                 let _ = child.wait();
+                let msg = stderr.and_then(|h| h.join().ok()).unwrap_or_default();
                 Err(bad(format!(
                     "ffmpeg cannot read {}: {}",
                     path.display(),
-                    if msg.trim().is_empty() {
-                        e.to_string()
-                    } else {
-                        msg.trim().to_string()
-                    }
+                    if msg.is_empty() { e.to_string() } else { msg }
                 )))
             }
         }
@@ -326,7 +346,23 @@ impl FrameSource for FfmpegSource {
     }
 
     fn next_frame(&mut self, frame: &mut Frame) -> Result<Option<f64>, SourceError> {
-        self.inner.next_frame(frame)
+        let got = self.inner.next_frame(frame)?;
+        if got.is_none() {
+            // The end of the stream: ffmpeg says whether it was the end of the video.
+            let status = self.child.wait().map_err(SourceError::Io)?;
+            if !status.success() {
+                let msg = self
+                    .stderr
+                    .take()
+                    .and_then(|h| h.join().ok())
+                    .unwrap_or_default();
+                return Err(bad(format!(
+                    "ffmpeg failed on {} ({status}): {msg}",
+                    self.path.display()
+                )));
+            }
+        }
+        Ok(got)
     }
 }
 

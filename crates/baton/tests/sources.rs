@@ -152,3 +152,43 @@ fn bad_input_is_refused_clearly() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn any_other_video_through_ffmpeg_when_it_is_installed() {
+    let have_ffmpeg = std::process::Command::new("ffmpeg")
+        .arg("-version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !have_ffmpeg {
+        eprintln!("ffmpeg is not installed: the ffmpeg path is not tried here");
+        return;
+    }
+    let video = Video::new(Script::steady("ffmpeg", 160.0, 30.0).beats(4).noise(2.0));
+    let dir = scratch("ffmpeg");
+    let y4m = dir.join("clip.y4m");
+    {
+        let file = std::io::BufWriter::new(std::fs::File::create(&y4m).unwrap());
+        let mut w = Y4mWriter::new(file, 640, 480, 30.0).unwrap();
+        for (_, f) in video.frames() {
+            w.write(&f).unwrap();
+        }
+    }
+    // Lossless FFV1 in Matroska: a container only ffmpeg reads here.
+    let mkv = dir.join("clip.mkv");
+    let status = std::process::Command::new("ffmpeg")
+        .args(["-v", "error", "-nostdin", "-y", "-i"])
+        .arg(&y4m)
+        .args(["-c:v", "ffv1"])
+        .arg(&mkv)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let mut src = source::open(&mkv, None).unwrap();
+    assert!((src.fps() - 30.0).abs() < 1e-9);
+    let (beats, frames) = run(src.as_mut());
+    assert_eq!(frames, video.frame_count());
+    let score = synth::score(&video, &beats, frames);
+    assert_eq!((score.missed, score.invented), (0, 0), "{score:?}");
+    assert!(score.beat_err_ms.0 < 1000.0 / 30.0 + 10.0, "{score:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
