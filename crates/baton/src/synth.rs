@@ -16,7 +16,8 @@
 //! How a frame is drawn: a dim background (a gradient; with clutter, muted rectangles, a
 //! white shirt the baton passes over, a bright lamp, a brown music stand); the LED a
 //! Gaussian spot (σ 2 px) three times brighter than the sensor's white, so its core
-//! saturates as a real LED's does; with motion blur, the average of nine positions over 90 %
+//! saturates as a real LED's does (overexposed, its core burns out to white and only the halo
+//! stays red); with motion blur, the average of nine positions over 90 %
 //! of the frame time (the frame's time is the middle of its exposure); noise added to every
 //! channel of every pixel (Gaussian, σ in 8-bit steps). A dropped frame is not delivered at
 //! all (the next frame keeps its own time); an occluded one is delivered without the LED.
@@ -58,6 +59,8 @@ pub struct Script {
     pub occlude: f64,
     /// The pattern is drawn higher, so its big rebounds leave the picture at the top.
     pub leave_frame: bool,
+    /// The LED overexposed: its core burns out to white, only its halo is red.
+    pub bloom: bool,
     /// Seed of everything random.
     pub seed: u64,
 }
@@ -86,6 +89,7 @@ impl Script {
             drop: 0.0,
             occlude: 0.0,
             leave_frame: false,
+            bloom: false,
             seed: 1,
         }
     }
@@ -139,6 +143,12 @@ impl Script {
         self
     }
 
+    /// An overexposed LED (white core, red halo).
+    pub fn bloom(mut self) -> Self {
+        self.bloom = true;
+        self
+    }
+
     /// Another seed.
     pub fn seed(mut self, seed: u64) -> Self {
         self.seed = seed;
@@ -153,7 +163,7 @@ impl Script {
 
 /// The standard set at `fps`: steady 60, 90, 120, 160; accelerando 80→140; ritardando
 /// 140→70; a fermata; clutter; a second red object; motion blur; noise; dropped frames; the
-/// LED leaving the picture.
+/// LED leaving the picture; an overexposed LED; all of the hard ones at once.
 pub fn suite(fps: f64) -> Vec<Script> {
     vec![
         Script::steady("steady 60", 60.0, fps).beats(16),
@@ -176,6 +186,9 @@ pub fn suite(fps: f64) -> Vec<Script> {
         Script::steady("leaves frame 100", 100.0, fps)
             .leave_frame()
             .seed(7),
+        Script::steady("overexposed 130", 130.0, fps)
+            .bloom()
+            .seed(10),
         Script::ramp("all at once 90-130", 90.0, 130.0, fps)
             .beats(32)
             .clutter()
@@ -485,9 +498,17 @@ impl Video {
                 if a < 0.004 {
                     continue;
                 }
+                // Overexposed, the light past the sensor's full scale spills into green and
+                // blue: the core turns white.
+                let mut led = LED;
+                if self.script.bloom && a > 1.0 {
+                    let spill = ((a - 1.0) / 1.2).min(1.0);
+                    led[1] += (255.0 - led[1]) * spill;
+                    led[2] += (255.0 - led[2]) * spill;
+                }
                 let a = a.min(1.0);
                 let i = 3 * (py * frame.width + px);
-                for (px, led) in frame.rgb[i..i + 3].iter_mut().zip(LED) {
+                for (px, led) in frame.rgb[i..i + 3].iter_mut().zip(led) {
                     *px = (f64::from(*px) * (1.0 - a) + led * a).round() as u8;
                 }
             }
