@@ -45,7 +45,7 @@ pub struct Blob {
     /// Highest `r - max(g, b)` in the blob.
     pub peak: u8,
     /// Bounding box, inclusive: x0, y0, x1, y1.
-    pub bbox: [u16; 4],
+    pub bbox: [u32; 4],
 }
 
 impl Blob {
@@ -53,8 +53,8 @@ impl Blob {
     /// radius of a round blob. An LED, even smeared by motion, is thin; a sleeve or a sign is
     /// not.
     pub fn thickness(&self) -> f64 {
-        let w = f64::from(self.bbox[2] - self.bbox[0]) + 1.0;
-        let h = f64::from(self.bbox[3] - self.bbox[1]) + 1.0;
+        let w = f64::from(self.bbox[2].saturating_sub(self.bbox[0])) + 1.0;
+        let h = f64::from(self.bbox[3].saturating_sub(self.bbox[1])) + 1.0;
         f64::from(self.area) / (w * w + h * h).sqrt()
     }
 }
@@ -115,7 +115,7 @@ impl Detector {
             let mut area = 0u32;
             let (mut sw, mut sx, mut sy) = (0f64, 0f64, 0f64);
             let mut peak = 0u8;
-            let mut bbox = [u16::MAX, u16::MAX, 0, 0];
+            let mut bbox = [u32::MAX, u32::MAX, 0, 0];
             self.stack.clear();
             self.stack.push(seed as u32);
             self.mask[seed] = 2;
@@ -130,10 +130,10 @@ impl Detector {
                 sx += weight * x as f64;
                 sy += weight * y as f64;
                 peak = peak.max(e.clamp(0, 255) as u8);
-                bbox[0] = bbox[0].min(x as u16);
-                bbox[1] = bbox[1].min(y as u16);
-                bbox[2] = bbox[2].max(x as u16);
-                bbox[3] = bbox[3].max(y as u16);
+                bbox[0] = bbox[0].min(x as u32);
+                bbox[1] = bbox[1].min(y as u32);
+                bbox[2] = bbox[2].max(x as u32);
+                bbox[3] = bbox[3].max(y as u32);
                 let x0 = x.saturating_sub(1);
                 let x1 = (x + 1).min(w - 1);
                 let y0 = y.saturating_sub(1);

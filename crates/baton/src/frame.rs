@@ -59,6 +59,9 @@ impl Frame {
         self.width = width;
         self.height = height;
         self.rgb.resize(3 * width * height, 0);
+        if width == 0 || height == 0 {
+            return;
+        }
         let mono = cb.is_empty() || cr.is_empty() || cw == 0 || ch == 0;
         // Which chroma column each pixel column reads.
         let ccol: Vec<usize> = (0..width)

@@ -56,7 +56,7 @@ fn grey_white_and_brown_are_not_red() {
     assert!(blobs.is_empty());
 }
 
-fn blob(x: f64, y: f64, area: u32, side: u16, peak: u8) -> Blob {
+fn blob(x: f64, y: f64, area: u32, side: u32, peak: u8) -> Blob {
     Blob {
         x,
         y,
@@ -64,10 +64,10 @@ fn blob(x: f64, y: f64, area: u32, side: u16, peak: u8) -> Blob {
         weight: f64::from(area) * f64::from(peak),
         peak,
         bbox: [
-            x as u16 - side / 2,
-            y as u16 - side / 2,
-            x as u16 + side / 2,
-            y as u16 + side / 2,
+            x as u32 - side / 2,
+            y as u32 - side / 2,
+            x as u32 + side / 2,
+            y as u32 + side / 2,
         ],
     }
 }

@@ -51,10 +51,10 @@ fn blob(x: f64, y: f64, area: u32, half: f64, peak: u8) -> Blob {
         weight: f64::from(area) * f64::from(peak),
         peak,
         bbox: [
-            (x - half).max(0.0) as u16,
-            (y - half).max(0.0) as u16,
-            (x + half) as u16,
-            (y + half) as u16,
+            (x - half).max(0.0) as u32,
+            (y - half).max(0.0) as u32,
+            (x + half) as u32,
+            (y + half) as u32,
         ],
     }
 }
@@ -160,7 +160,12 @@ fn a_hidden_led_makes_no_beats_and_dropped_frames_are_not_delivered() {
 
 #[test]
 fn an_overexposed_led_is_white_in_the_middle_and_still_found() {
-    let v = Video::new(Script::steady("bloom", 120.0, 30.0).beats(4).bloom().noise(0.0));
+    let v = Video::new(
+        Script::steady("bloom", 120.0, 30.0)
+            .beats(4)
+            .bloom()
+            .noise(0.0),
+    );
     let (t, frame) = v.frame_at(3);
     let (x, y) = v.led_at(t);
     let [r, g, b] = frame.pixel(x.round() as usize, y.round() as usize);
@@ -169,5 +174,8 @@ fn an_overexposed_led_is_white_in_the_middle_and_still_found() {
     orch_baton::Detector::default().detect(&frame, &mut blobs);
     assert_eq!(blobs.len(), 1);
     // A ring round the white core, centred on the LED.
-    assert!((blobs[0].x - x).abs() < 0.3 && (blobs[0].y - y).abs() < 0.3, "{blobs:?}");
+    assert!(
+        (blobs[0].x - x).abs() < 0.3 && (blobs[0].y - y).abs() < 0.3,
+        "{blobs:?}"
+    );
 }
