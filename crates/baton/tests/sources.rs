@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use orch_baton::source::{self, SourceError, Y4mWriter};
+use orch_baton::source::{self, FrameSource, SourceError, Y4mWriter};
 use orch_baton::synth::{self, Script, Video};
 use orch_baton::{Baton, Beat, Frame};
 
@@ -13,7 +13,7 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-fn run(src: &mut dyn source::FrameSource) -> (Vec<Beat>, usize) {
+fn run(src: &mut dyn FrameSource) -> (Vec<Beat>, usize) {
     let mut baton = Baton::default();
     let mut frame = Frame::default();
     let mut beats = Vec::new();
@@ -191,4 +191,48 @@ fn any_other_video_through_ffmpeg_when_it_is_installed() {
     assert_eq!((score.missed, score.invented), (0, 0), "{score:?}");
     assert!(score.beat_err_ms.0 < 1000.0 / 30.0 + 10.0, "{score:?}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn garbage_never_panics() {
+    let mut rng = synth::Rng::new(77);
+    let (mut opened, mut frames) = (0, 0);
+    for case in 0..300 {
+        let (w, h) = (1 + rng.next_u64() % 40, 1 + rng.next_u64() % 30);
+        let cs = ["C420jpeg", "C444", "C422", "Cmono", "C420p10", "Cfoo"][case % 6];
+        let mut bytes = format!("YUV4MPEG2 W{w} H{h} F30:1 {cs}\n").into_bytes();
+        for _ in 0..rng.next_u64() % 4 {
+            if rng.unit() < 0.8 {
+                bytes.extend_from_slice(b"FRAME\n");
+            }
+            let n = rng.next_u64() % (3 * w * h + 20);
+            bytes.extend((0..n).map(|_| rng.next_u64() as u8));
+        }
+        if case % 5 == 0 {
+            // Mangle the header too.
+            let i = (rng.next_u64() as usize) % bytes.len();
+            bytes[i] = rng.next_u64() as u8;
+        }
+        let Ok(mut src) = source::Y4mSource::new(&bytes[..], None) else {
+            continue;
+        };
+        opened += 1;
+        let mut baton = Baton::default();
+        let mut frame = Frame::default();
+        while let Ok(Some(t)) = src.next_frame(&mut frame) {
+            frames += 1;
+            assert_eq!(frame.rgb.len(), 3 * frame.width * frame.height);
+            if let Some(b) = baton.push(t, &frame) {
+                assert!(b.t_ms.is_finite() && b.x.is_finite() && b.y.is_finite());
+            }
+        }
+        let mut junk: Vec<u8> = b"\x89PNG\r\n\x1a\n".to_vec();
+        junk.extend((0..rng.next_u64() % 200).map(|_| rng.next_u64() as u8));
+        assert!(source::read_png(&junk[..], &mut Frame::default()).is_err());
+    }
+    // Both paths were taken: headers refused and accepted, frames read.
+    assert!(
+        opened > 50 && opened < 300 && frames > 50,
+        "{opened} {frames}"
+    );
 }
