@@ -15,8 +15,9 @@
 //!    coasting through missed frames and the LED leaving the picture ([`TrackParams`]).
 //! 3. [`beat`]: the ictus at the bottom of each downstroke (the turn from down to up, its
 //!    time refined below the frame by fitting a V to the samples around the bottom), and a
-//!    robust tempo: median-referenced intervals, outliers (a missed or invented beat, a
-//!    fermata) ignored, the trend followed ([`BeatParams`]).
+//!    robust tempo: the recent intervals checked against the running estimate, outliers (a
+//!    missed or invented beat, a fermata) ignored, a sudden change adopted once two intervals
+//!    agree on it, the trend of an accelerando or a ritardando followed ([`BeatParams`]).
 //!
 //! **Latency**: a beat is confirmed two samples after the bottom one (one, if that one has
 //! already risen half the stroke, as when frames are lost), so it is known 2 frames after the
@@ -36,7 +37,8 @@
 //! video through an `ffmpeg` subprocess (the only I/O here; a V4L2 camera would be one more
 //! [`source::FrameSource`]); [`synth`] is the evaluation harness: it draws conductor videos
 //! with known beats (steady, accelerando, ritardando, fermata, clutter, a second red object,
-//! motion blur, noise, dropped frames) and scores the tracker on them.
+//! motion blur, noise, dropped frames, the LED leaving the picture, an overexposed LED) and
+//! scores the tracker on them.
 //!
 //! ```
 //! use orch_baton::{synth, Baton};
