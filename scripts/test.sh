@@ -38,6 +38,9 @@ if [ -f fuzz/Cargo.toml ]; then cargo check --manifest-path fuzz/Cargo.toml --bi
 step "tests (every fuzz corpus and crash regression is replayed by the fuzz_replay tests)"
 cargo test --workspace --all-features
 
+step "orch-baton: every generated conductor video at 30 and 60 fps (heavy: release)"
+cargo test -p orch-baton --release --test videos -- --ignored
+
 step "firmware: the thesis's ATmega16 board, built and tested in simavr (firmware/test.sh)"
 (cd firmware/atmega16 && cargo fmt -- --check)
 (cd firmware/atmega16-hil && cargo fmt -- --check && cargo clippy --all-targets -- -D warnings)

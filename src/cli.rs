@@ -25,6 +25,8 @@ pub enum Command {
     Analyze(AnalyzeArgs),
     /// Print the default robot configuration (robot.toml), commented.
     Config,
+    /// Follow a conductor's baton (a red LED at its tip) in a video and print each beat.
+    Baton(BatonArgs),
 }
 
 /// Where the bytes come from and how they are written.
@@ -104,4 +106,17 @@ pub struct AnalyzeArgs {
     /// Tempo factor: 2 plays twice as fast, 0.5 half as fast.
     #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
     pub tempo: f64,
+}
+
+#[derive(Args, Debug)]
+pub struct BatonArgs {
+    /// The video: a `.y4m` file, a folder of numbered PNG frames (needs --fps), or anything
+    /// ffmpeg reads (when ffmpeg is installed).
+    pub video: PathBuf,
+    /// Frames per second: needed for a folder of PNGs; overrides the video's own rate.
+    #[arg(long, value_name = "N")]
+    pub fps: Option<f64>,
+    /// One JSON object a line: {"t_ms":T,"bpm":B,"x":X,"y":Y}.
+    #[arg(long)]
+    pub json: bool,
 }

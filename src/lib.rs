@@ -4,6 +4,7 @@
 //! Host I/O lives here: reading files and standard input, the robot configuration, the live
 //! terminal view, and the engine that drives the core onto the virtual robot.
 
+pub mod baton;
 pub mod cli;
 pub mod decode;
 pub mod error;
@@ -23,5 +24,6 @@ pub fn run(command: cli::Command) -> anyhow::Result<()> {
         cli::Command::Play(args) => play::run_play(&args),
         cli::Command::Analyze(args) => play::run_analyze(&args),
         cli::Command::Config => robot::print_default(),
+        cli::Command::Baton(args) => baton::run(&args),
     }
 }
