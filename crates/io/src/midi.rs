@@ -322,6 +322,10 @@ impl<P: Port> MidiOut for MidiPort<P> {
         let Some(&first) = bytes.first() else {
             return Ok(());
         };
+        if self.port.is_none() {
+            // Opened again (if its backoff has passed), it needs a status byte first.
+            self.reconnect();
+        }
         match first {
             0x80..=0xEF => {
                 self.status = first;
