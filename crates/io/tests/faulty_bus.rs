@@ -5,6 +5,7 @@
 //! bus, and the board that came back is re-initialised.
 
 use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use embedded_hal::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
@@ -53,6 +54,20 @@ struct FaultyBus {
     count: u32,
     returned: bool,
     pauses: u32,
+    /// Every board's (address, outputs, configuration) when the bus is dropped.
+    at_drop: Arc<Mutex<Vec<(u8, u16, u16)>>>,
+}
+
+impl Drop for FaultyBus {
+    fn drop(&mut self) {
+        *self.at_drop.lock().unwrap() = self
+            .robot
+            .bus()
+            .devices()
+            .iter()
+            .map(|d| (d.address(), d.output(), d.configuration()))
+            .collect();
+    }
 }
 
 impl FaultyBus {
@@ -64,6 +79,7 @@ impl FaultyBus {
             count: 0,
             returned: false,
             pauses: 0,
+            at_drop: Arc::default(),
         }
     }
 }
@@ -305,4 +321,59 @@ fn a_board_that_never_answers_is_played_around_and_none_that_answers_is_an_error
         panic!("no board answers: an error");
     };
     assert!(e.to_string().contains("no finger board answered"), "{e}");
+}
+
+/// An output that panics at its `n`th send: a bug on the sender's thread.
+struct PanicAt<M> {
+    inner: M,
+    n: usize,
+}
+
+impl<M: orch_perform::MidiOut> orch_perform::MidiOut for PanicAt<M> {
+    type Error = M::Error;
+    fn send(&mut self, t_us: u64, bytes: &[u8]) -> Result<(), M::Error> {
+        self.n -= 1;
+        assert!(self.n > 0, "a bug in the middle of the piece");
+        self.inner.send(t_us, bytes)
+    }
+    fn next_deadline(&self) -> Option<u64> {
+        self.inner.next_deadline()
+    }
+    fn poll(&mut self, t_us: u64) -> Result<(), M::Error> {
+        self.inner.poll(t_us)
+    }
+}
+
+#[test]
+fn a_panic_in_the_middle_of_a_piece_lets_go_of_every_finger_as_it_unwinds() {
+    let song = song();
+    let setup = Setup {
+        config: thesis_config(),
+        sim: SimConfig::thesis(),
+        compensation: true,
+        tempo: Tempo::NORMAL,
+        link: Link::Direct,
+    };
+    let bus = FaultyBus::new(vec![]);
+    let at_drop = Arc::clone(&bus.at_drop);
+    let out = BoardsOut::new(setup.config, bus).unwrap();
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let mut out = PanicAt { inner: out, n: 301 };
+        let _ = perform(
+            &setup,
+            song_events(&song),
+            song.notes(),
+            Some(&mut out),
+            &mut VirtualClock::new(),
+            None,
+            None,
+        );
+    }));
+    assert!(result.is_err());
+    // (Without the release on drop, keys are down here: the test fails.)
+    let boards = at_drop.lock().unwrap().clone();
+    assert_eq!(boards.len(), 4);
+    for (address, output, configuration) in boards {
+        assert_eq!((address, output, configuration), (address, 0, 0));
+    }
 }

@@ -268,3 +268,40 @@ impl<M: MidiOut> MidiOut for Paced<M> {
         self.0.send(t_us, bytes)
     }
 }
+
+/// An output that panics at its `n`th send: a bug on the sender's thread.
+struct PanicAt<M> {
+    inner: M,
+    n: usize,
+}
+
+impl<M: MidiOut> MidiOut for PanicAt<M> {
+    type Error = M::Error;
+    fn send(&mut self, t_us: u64, bytes: &[u8]) -> Result<(), M::Error> {
+        self.n -= 1;
+        assert!(self.n > 0, "a bug in the middle of the piece");
+        self.inner.send(t_us, bytes)
+    }
+}
+
+#[test]
+fn a_panic_in_the_middle_of_a_piece_lets_go_of_every_key_as_it_unwinds() {
+    let path = fifo("panic");
+    let reader = fifo_reader(&path);
+    let far_end = std::thread::spawn(move || read_back(reader, usize::MAX));
+    let out = RawMidiOut::open(path.to_str().unwrap()).unwrap();
+    let played = std::panic::catch_unwind(std::panic::AssertUnwindSafe(move || {
+        let mut out = PanicAt { inner: out, n: 200 };
+        play(&mut out, Link::Direct);
+    }));
+    assert!(played.is_err());
+    let got = far_end.join().unwrap();
+    let want: Vec<u8> = planned(Link::Direct)
+        .into_iter()
+        .take(199)
+        .flat_map(|s| s.1)
+        .collect();
+    assert_eq!(&got[..want.len()], &want[..]);
+    assert_eq!(&got[want.len()..], &all_notes_off()[..]);
+    std::fs::remove_file(&path).unwrap();
+}
