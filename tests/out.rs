@@ -103,10 +103,13 @@ fn planned(file: &[u8], link: Link) -> Vec<u8> {
     rec.sent.into_iter().flat_map(|s| s.1).collect()
 }
 
-/// A pseudo-terminal pair: the far end is read on a thread into (arrival, bytes) chunks.
+/// What the far end read: (arrival, bytes) chunks.
+type Chunks = Arc<Mutex<Vec<(Instant, Vec<u8>)>>>;
+
+/// A pseudo-terminal pair: the far end is read on a thread into chunks.
 struct Pty {
     path: String,
-    got: Arc<Mutex<Vec<(Instant, Vec<u8>)>>>,
+    got: Chunks,
     _slave: OwnedFd,
 }
 
@@ -280,7 +283,7 @@ fn sigterm_during_a_chord_releases_every_key_on_every_output_before_exit() {
             "{name}: no All Notes Off at the end: {bytes:02x?}"
         );
         assert!(
-            !bytes.iter().any(|&b| b == 0x80),
+            !bytes.contains(&0x80),
             "{name}: a Note-Off came before the stop: {bytes:02x?}"
         );
     }
