@@ -316,6 +316,13 @@ fn bad_outs_are_refused_with_exit_2() {
             "cannot open /nonexistent/midi",
         ),
         (vec!["--fast", "--out", "udp:127.0.0.1:9"], "--fast"),
+        #[cfg(not(feature = "alsa"))]
+        (vec!["--out", "alsa:128:0"], "the `alsa` feature"),
+        #[cfg(feature = "alsa")]
+        (
+            vec!["--out", "alsa:no such client:0"],
+            "cannot open ALSA sequencer port",
+        ),
     ] {
         let out = Command::new(env!("CARGO_BIN_EXE_orch"))
             .args(["play", file.to_str().unwrap(), "--no-view"])

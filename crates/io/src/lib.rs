@@ -26,11 +26,16 @@
 //!
 //! ## Cargo features
 //!
-//! None. No system library is needed: serial ports through `serialport` without libudev,
-//! I2C through the kernel's `i2c-dev` interface.
+//! - `alsa` (off by default): `alsa:CLIENT:PORT` outputs, ALSA sequencer ports
+//!   ([`alsa_seq`]). It links alsa-lib (`libasound2-dev` to build).
+//!
+//! Without it no system library is needed: serial ports through `serialport` without
+//! libudev, I2C through the kernel's `i2c-dev` interface, raw MIDI as a file.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+#[cfg(feature = "alsa")]
+pub mod alsa_seq;
 pub mod boards;
 pub mod midi;
 pub mod spec;
@@ -127,6 +132,9 @@ pub enum Output {
     RawMidi(RawMidiOut),
     /// UDP datagrams.
     Udp(UdpOut),
+    /// An ALSA sequencer port.
+    #[cfg(feature = "alsa")]
+    Alsa(alsa_seq::AlsaOut),
     /// Finger boards on a Linux I2C bus.
     I2c(Box<BoardsOut<LinuxI2c>>),
 }
@@ -144,6 +152,8 @@ impl Output {
             Target::Serial(p) => Output::Serial(SerialOut::open(&path(p))?),
             Target::RawMidi(p) => Output::RawMidi(RawMidiOut::open(&path(p))?),
             Target::Udp(a) => Output::Udp(UdpOut::open(a)?),
+            #[cfg(feature = "alsa")]
+            Target::Alsa(a) => Output::Alsa(alsa_seq::AlsaOut::open(a)?),
             Target::I2c(p) => Output::I2c(Box::new(BoardsOut::new(*config, open_i2c(&path(p))?)?)),
         }))
     }
@@ -154,6 +164,8 @@ impl Output {
             Output::Serial(p) => OutStats::Port(p.stats()),
             Output::RawMidi(p) => OutStats::Port(p.stats()),
             Output::Udp(p) => OutStats::Port(p.stats()),
+            #[cfg(feature = "alsa")]
+            Output::Alsa(p) => OutStats::Port(p.stats()),
             Output::I2c(b) => OutStats::Boards(b.boards().stats()),
         }
     }
@@ -176,6 +188,8 @@ impl MidiOut for Output {
             Output::Serial(p) => p.send(t_us, bytes).map_err(|e| match e {}),
             Output::RawMidi(p) => p.send(t_us, bytes).map_err(|e| match e {}),
             Output::Udp(p) => p.send(t_us, bytes).map_err(|e| match e {}),
+            #[cfg(feature = "alsa")]
+            Output::Alsa(p) => p.send(t_us, bytes).map_err(|e| match e {}),
             Output::I2c(b) => b.send(t_us, bytes),
         }
     }
@@ -199,6 +213,8 @@ impl MidiOut for Output {
             Output::Serial(p) => p.finish(t_us).map_err(|e| match e {}),
             Output::RawMidi(p) => p.finish(t_us).map_err(|e| match e {}),
             Output::Udp(p) => p.finish(t_us).map_err(|e| match e {}),
+            #[cfg(feature = "alsa")]
+            Output::Alsa(p) => p.finish(t_us).map_err(|e| match e {}),
             Output::I2c(b) => b.finish(t_us),
         }
     }

@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! OUT      = KIND [":" TARGET] [":ch=" CHANNELS]
-//! KIND     = sim | serial | rawmidi | udp | i2c
+//! KIND     = sim | serial | rawmidi | udp | i2c | alsa
 //! CHANNELS = a comma-separated list of channels 1..=16 and ranges: 1   2,3   1-4,10
 //! ```
 //!
@@ -13,6 +13,7 @@
 //! | `rawmidi:/dev/snd/midiC1D0` | the kernel's raw MIDI device, written as a file |
 //! | `udp:HOST:PORT` | raw MIDI bytes, one whole message per datagram |
 //! | `i2c:/dev/i2c-1` | PCA9555 finger boards on the host's I2C bus, driven by this host |
+//! | `alsa:128:0` | an ALSA sequencer port (with the `alsa` feature) |
 //!
 //! `:ch=` at the end keeps only those channels' messages for that output: one file on several
 //! robots, `--out serial:/dev/ttyUSB0:ch=1 --out udp:127.0.0.1:9000:ch=2`.
@@ -33,8 +34,8 @@ impl fmt::Display for SpecError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "--out {}: {} (give sim, serial:DEVICE, rawmidi:DEVICE, udp:HOST:PORT or \
-             i2c:DEVICE, optionally followed by :ch=1,2-4)",
+            "--out {}: {} (give sim, serial:DEVICE, rawmidi:DEVICE, udp:HOST:PORT, \
+             i2c:DEVICE or alsa:CLIENT:PORT, optionally followed by :ch=1,2-4)",
             self.spec, self.reason
         )
     }
@@ -55,6 +56,9 @@ pub enum Target {
     Udp(String),
     /// An I2C bus with finger boards on it.
     I2c(PathBuf),
+    /// An ALSA sequencer port, `CLIENT:PORT` (numbers or the client's name).
+    #[cfg(feature = "alsa")]
+    Alsa(String),
 }
 
 /// MIDI channels, 0-based bits (bit 0 is channel 1).
@@ -175,9 +179,13 @@ impl OutSpec {
                     _ => return Err(err(format!("`{t}` is not HOST:PORT"))),
                 }
             }
+            #[cfg(feature = "alsa")]
+            "alsa" => Target::Alsa(need("CLIENT:PORT")?.to_string()),
+            #[cfg(not(feature = "alsa"))]
             "alsa" => {
                 return Err(err(
-                    "ALSA sequencer ports are not supported by this build; use rawmidi:/dev/snd/midiCxDy"
+                    "ALSA sequencer ports need orch built with the `alsa` feature; \
+                     rawmidi:/dev/snd/midiCxDy reaches the same hardware without it"
                         .into(),
                 ))
             }
@@ -240,7 +248,10 @@ mod tests {
             ("serial:/dev/x:ch=17", "not 1 to 16"),
             ("serial:/dev/x:ch=4-2", "backwards"),
             ("sim:foo", "no target"),
-            ("alsa:128:0", "not supported"),
+            #[cfg(not(feature = "alsa"))]
+            ("alsa:128:0", "the `alsa` feature"),
+            #[cfg(feature = "alsa")]
+            ("alsa", "needs CLIENT:PORT"),
         ] {
             let e = OutSpec::parse(bad).unwrap_err().to_string();
             assert!(e.contains(why), "{bad}: {e}");
