@@ -5,7 +5,6 @@
 
 use std::io::Read;
 use std::net::UdpSocket;
-use std::os::fd::OwnedFd;
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::sync::{Arc, Mutex};
@@ -110,18 +109,36 @@ type Chunks = Arc<Mutex<Vec<(Instant, Vec<u8>)>>>;
 struct Pty {
     path: String,
     got: Chunks,
-    _slave: OwnedFd,
+    _slave: std::fs::File,
+}
+
+/// A pseudo-terminal pair whose descriptors no child inherits (tests run in parallel and
+/// spawn `orch`: a master inherited by another test's child would outlive its closing): the
+/// master, the slave's path and the slave held open (a master reads EIO while no slave is
+/// open).
+fn pty_pair() -> (nix::pty::PtyMaster, String, std::fs::File) {
+    use nix::fcntl::OFlag;
+    use std::os::unix::fs::OpenOptionsExt;
+    let master =
+        nix::pty::posix_openpt(OFlag::O_RDWR | OFlag::O_NOCTTY | OFlag::O_CLOEXEC).unwrap();
+    nix::pty::grantpt(&master).unwrap();
+    nix::pty::unlockpt(&master).unwrap();
+    let path = nix::pty::ptsname_r(&master).unwrap();
+    // std opens with O_CLOEXEC.
+    let slave = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .custom_flags(nix::libc::O_NOCTTY)
+        .open(&path)
+        .unwrap();
+    (master, path, slave)
 }
 
 fn pty() -> Pty {
-    let pair = nix::pty::openpty(None, None).unwrap();
-    let path = nix::unistd::ttyname(&pair.slave)
-        .unwrap()
-        .to_string_lossy()
-        .into_owned();
+    let (master, path, slave) = pty_pair();
     let got = Arc::new(Mutex::new(Vec::new()));
     let sink = Arc::clone(&got);
-    let mut master = std::fs::File::from(pair.master);
+    let mut master = master;
     std::thread::spawn(move || {
         let mut buf = [0u8; 4096];
         // Ends with EIO when every slave descriptor is closed.
@@ -137,7 +154,7 @@ fn pty() -> Pty {
     Pty {
         path,
         got,
-        _slave: pair.slave,
+        _slave: slave,
     }
 }
 
@@ -316,6 +333,10 @@ fn bad_outs_are_refused_with_exit_2() {
             "cannot open /nonexistent/midi",
         ),
         (vec!["--fast", "--out", "udp:127.0.0.1:9"], "--fast"),
+        (
+            vec!["--out", "i2c:/nonexistent/i2c-9"],
+            "cannot open /nonexistent/i2c-9",
+        ),
         #[cfg(not(feature = "alsa"))]
         (vec!["--out", "alsa:128:0"], "the `alsa` feature"),
         #[cfg(feature = "alsa")]
@@ -333,4 +354,64 @@ fn bad_outs_are_refused_with_exit_2() {
         assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(why), "{args:?}: {err}");
     }
+}
+
+#[test]
+fn i2c_on_something_that_is_not_a_bus_is_refused_with_exit_2() {
+    // A regular file is no I2C adapter: the kernel refuses the adapter's ioctl at once.
+    let file = temp("i2c.mid");
+    std::fs::write(&file, piece()).unwrap();
+    let bus = temp("not-a-bus");
+    std::fs::write(&bus, b"").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_orch"))
+        .args(["play", file.to_str().unwrap(), "--no-view", "--out"])
+        .arg(format!("i2c:{}", bus.display()))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("cannot open") && err.contains("i2c:"), "{err}");
+}
+
+#[test]
+fn a_serial_device_that_disappears_mid_piece_is_reported_and_the_piece_plays_on() {
+    let file = temp("gone.mid");
+    std::fs::write(&file, piece()).unwrap();
+    let (mut master, path, slave) = pty_pair();
+    // The far end reads the first bytes, then goes away (its master side closed): writes to
+    // the line fail from then on.
+    let far = std::thread::spawn(move || {
+        let mut buf = [0u8; 64];
+        let mut n = 0;
+        while n < 20 {
+            n += master.read(&mut buf).unwrap();
+        }
+        drop(master);
+        n
+    });
+    let t0 = Instant::now();
+    let out = Command::new(env!("CARGO_BIN_EXE_orch"))
+        .args([
+            "play",
+            file.to_str().unwrap(),
+            "--json",
+            "--no-view",
+            "--out",
+        ])
+        .arg(format!("serial:{path}"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(t0.elapsed() < Duration::from_secs(10), "no hang");
+    assert!(far.join().unwrap() >= 20);
+    assert!(err.contains("the MIDI output is gone"), "{err}");
+    assert!(err.contains("went away 1 times"), "{err}");
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["link"]["lost"], 1, "{report}");
+    assert!(report["link"]["dropped_bytes"].as_u64().unwrap() > 0);
+    // The virtual copy played the whole piece.
+    assert_eq!(report["notes"], 30);
+    assert_eq!(report["unmatched"], 0);
+    drop(slave);
 }
