@@ -377,3 +377,66 @@ fn a_panic_in_the_middle_of_a_piece_lets_go_of_every_finger_as_it_unwinds() {
         assert_eq!((address, output, configuration), (address, 0, 0));
     }
 }
+
+#[test]
+fn stopping_during_a_chord_lets_every_finger_up_before_the_performance_returns() {
+    use orch_perform::{Control, ScoreEvent};
+    use orch_seq::WireBytes;
+    // C3 E3 G3 C4 on boards 0x21 and 0x22 from 0.25 s, held 20 s; stopped at 2 s (as `q`,
+    // SIGINT or SIGTERM stop `orch play`).
+    let mut ev = Vec::new();
+    for (at, status, vel) in [(250_000, 0x90, 100), (20_250_000, 0x80, 0)] {
+        for n in [48u8, 52, 55, 60] {
+            ev.push(ScoreEvent {
+                score_us: at,
+                bytes: WireBytes::new(&[status, n, vel]),
+            });
+        }
+    }
+    let setup = Setup {
+        config: thesis_config(),
+        sim: SimConfig::thesis(),
+        compensation: true,
+        tempo: Tempo::NORMAL,
+        link: Link::Direct,
+    };
+    let mut out = BoardsOut::new(setup.config, FaultyBus::new(vec![])).unwrap();
+    let control = Control::new();
+    let stopper = std::sync::Arc::clone(&control);
+    let mut down_before_stop = 0;
+    let mut on_live = |l: &orch_perform::Live| {
+        if l.song_us >= 2_000_000 {
+            down_before_stop = down_before_stop.max(l.keys_down.iter().filter(|d| **d).count());
+            stopper.stop();
+        }
+    };
+    let played = perform(
+        &setup,
+        ev.into_iter(),
+        4,
+        Some(&mut out),
+        &mut VirtualClock::new(),
+        Some(&control),
+        Some(&mut on_live),
+    )
+    .unwrap();
+    assert!(played.stopped);
+    assert_eq!(
+        down_before_stop, 4,
+        "the chord was down when it was stopped"
+    );
+    let bus = out.boards().set().bus();
+    let log = bus.robot.bus().log();
+    // The chord went out (two boards), and the last write to each board let every finger up,
+    // before the 20 s the chord was written for.
+    for a in [0x21u8, 0x22] {
+        let writes: Vec<_> = log.iter().filter(|w| w.address == a).collect();
+        assert!(writes.iter().any(|w| w.bytes[0] == 0x02 && w.driven != 0));
+        let last = writes.last().unwrap();
+        assert_eq!(last.bytes, vec![0x02, 0, 0], "board {a:#04x}");
+        assert!(last.end.as_micros() < 3_000_000, "{:?}", last.end);
+    }
+    for d in bus.robot.bus().devices() {
+        assert_eq!(d.driven(), 0, "board {:#04x}", d.address());
+    }
+}
