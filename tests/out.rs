@@ -415,3 +415,56 @@ fn a_serial_device_that_disappears_mid_piece_is_reported_and_the_piece_plays_on(
     assert_eq!(report["unmatched"], 0);
     drop(slave);
 }
+
+#[test]
+fn a_serial_device_that_comes_back_gets_all_notes_off_first_and_plays_on() {
+    // The device path is a link (as udev makes /dev/serial/by-id/… links); the line behind it
+    // goes away mid-piece and another takes its place, as an unplugged adapter plugged back.
+    let file = temp("back.mid");
+    std::fs::write(&file, piece()).unwrap();
+    let link = temp("ttyMIDI");
+    let _ = std::fs::remove_file(&link);
+    let (mut first, first_path, first_slave) = pty_pair();
+    std::os::unix::fs::symlink(&first_path, &link).unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_orch"))
+        .args([
+            "play",
+            file.to_str().unwrap(),
+            "--json",
+            "--no-view",
+            "--out",
+        ])
+        .arg(format!("serial:{}", link.display()))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut buf = [0u8; 64];
+    let mut n = 0;
+    while n < 20 {
+        n += first.read(&mut buf).unwrap();
+    }
+    drop(first);
+    let second = pty();
+    std::fs::remove_file(&link).unwrap();
+    std::os::unix::fs::symlink(&second.path, &link).unwrap();
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("the MIDI output is back"), "{err}");
+    std::thread::sleep(Duration::from_millis(200));
+    let got = bytes_of(&second.got);
+    let off = all_notes_off();
+    assert!(got.len() > 2 * off.len(), "{got:02x?}");
+    assert_eq!(
+        &got[..off.len()],
+        &off[..],
+        "All Notes Off first: {got:02x?}"
+    );
+    assert!(got[off.len()] >= 0x80, "then a status byte: {got:02x?}");
+    assert!(got.ends_with(&off));
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["link"]["lost"], 1, "{report}");
+    assert_eq!(report["link"]["reconnected"], 1, "{report}");
+    drop(first_slave);
+}
