@@ -221,6 +221,13 @@ fn serial_to_a_pty_writes_exactly_the_planned_bytes_at_their_time() {
             .sum();
         peak = peak.max(n);
     }
+    // Written at the wire's pace: a DIN line carries 31.25 bytes in 10 ms (one write of up to
+    // 3 bytes goes at once, and the reader's timestamps can bunch a little). Unpaced, the
+    // closing All Notes Off alone is 48 bytes at once.
+    assert!(
+        peak <= 40,
+        "{peak} bytes within 10 ms: faster than the wire"
+    );
     eprintln!(
         "serial to a pty: {} bytes in {} reads over {:.3} s: {:.0} bytes/s on average, at most \
          {} bytes in 10 ms ({:.0} bytes/s; a DIN line carries 3125 bytes/s)",

@@ -1,5 +1,9 @@
 //! MIDI byte outputs: a DIN line through a UART, a raw MIDI device, UDP datagrams.
 //!
+//! A serial line is written at the wire's pace (320 µs a byte, [`Port::byte_time`]): a write
+//! waits until the bytes before it would have left a DIN line, so a device that does not pace
+//! itself gets them when the virtual copy does.
+//!
 //! Each is a [`MidiPort`] over one [`Port`]: it writes what the performer sends, and when the
 //! device goes away (unplugged, its reader gone, a write that cannot finish within
 //! [`WRITE_TIMEOUT`]) it says so once, keeps playing the virtual copy, tries to open the
@@ -52,11 +56,23 @@ pub trait Port: Sized {
     fn whole_messages() -> bool {
         false
     }
+
+    /// The time one byte takes on the line, if the port must not be written faster than
+    /// that: a write waits until the bytes before it would have left the wire.
+    fn byte_time() -> Option<Duration> {
+        None
+    }
 }
 
 /// A UART at 31 250 baud, 8N1, no flow control (`serialport`; on Linux the rate is set
-/// exactly with `termios2` and `BOTHER`, and read back to check).
-pub struct Serial(Box<dyn serialport::SerialPort>);
+/// exactly with `termios2` and `BOTHER`, and read back to check). The line is then written
+/// through a second, non-blocking descriptor of the same device (the settings belong to the
+/// device), so that no write blocks past [`WRITE_TIMEOUT`]: a blocking write to a full tty
+/// would wait for every byte, however long.
+pub struct Serial {
+    _port: Box<dyn serialport::SerialPort>,
+    file: std::fs::File,
+}
 
 impl Port for Serial {
     fn open(target: &str) -> Result<Self, OutError> {
@@ -81,11 +97,26 @@ impl Port for Serial {
                 got,
             });
         }
-        Ok(Serial(port))
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .custom_flags(O_NONBLOCK | O_NOCTTY)
+            .open(target)
+            .map_err(|e| OutError::Open {
+                device: target.into(),
+                source: e,
+            })?;
+        Ok(Serial { _port: port, file })
     }
 
     fn write_bytes(&mut self, bytes: &[u8]) -> io::Result<()> {
-        self.0.write_all(bytes)
+        write_within_timeout(&mut self.file, bytes)
+    }
+
+    /// 320 µs: written at the wire's own pace, a device that does not pace itself (a
+    /// pseudo-terminal to a simulator, a USB bridge with a deep buffer) gets the bytes when a
+    /// DIN line would deliver them, as the virtual copy takes them.
+    fn byte_time() -> Option<Duration> {
+        Some(Duration::from_micros(320))
     }
 }
 
@@ -98,12 +129,38 @@ pub struct RawMidi {
 
 /// `O_NONBLOCK` on Linux.
 const O_NONBLOCK: i32 = 0o4000;
+/// `O_NOCTTY` on Linux: a terminal opened by orch never becomes its controlling terminal.
+const O_NOCTTY: i32 = 0o400;
+
+/// Writes all of `bytes` to a non-blocking file: a full device buffer is waited for, up to
+/// [`WRITE_TIMEOUT`].
+fn write_within_timeout(file: &mut std::fs::File, mut bytes: &[u8]) -> io::Result<()> {
+    let deadline = Instant::now() + WRITE_TIMEOUT;
+    while !bytes.is_empty() {
+        match file.write(bytes) {
+            Ok(0) => return Err(io::ErrorKind::WriteZero.into()),
+            Ok(n) => bytes = &bytes[n..],
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock && Instant::now() < deadline => {
+                std::thread::sleep(Duration::from_micros(500));
+            }
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
+                return Err(io::Error::new(
+                    io::ErrorKind::TimedOut,
+                    "the device took no bytes for 1 s",
+                ))
+            }
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(())
+}
 
 impl Port for RawMidi {
     fn open(target: &str) -> Result<Self, OutError> {
         let file = std::fs::OpenOptions::new()
             .write(true)
-            .custom_flags(O_NONBLOCK)
+            .custom_flags(O_NONBLOCK | O_NOCTTY)
             .open(target)
             .map_err(|e| OutError::Open {
                 device: target.into(),
@@ -112,27 +169,8 @@ impl Port for RawMidi {
         Ok(RawMidi { file })
     }
 
-    fn write_bytes(&mut self, mut bytes: &[u8]) -> io::Result<()> {
-        // Non-blocking: a full device buffer is waited for, up to the write timeout.
-        let deadline = Instant::now() + WRITE_TIMEOUT;
-        while !bytes.is_empty() {
-            match self.file.write(bytes) {
-                Ok(0) => return Err(io::ErrorKind::WriteZero.into()),
-                Ok(n) => bytes = &bytes[n..],
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock && Instant::now() < deadline => {
-                    std::thread::sleep(Duration::from_micros(500));
-                }
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
-                    return Err(io::Error::new(
-                        io::ErrorKind::TimedOut,
-                        "the device took no bytes for 1 s",
-                    ))
-                }
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(e),
-            }
-        }
-        Ok(())
+    fn write_bytes(&mut self, bytes: &[u8]) -> io::Result<()> {
+        write_within_timeout(&mut self.file, bytes)
     }
 }
 
@@ -200,6 +238,9 @@ pub struct MidiPort<P: Port> {
     backoff: Duration,
     finished: bool,
     stats: PortStats,
+    /// When the bytes written so far have left the wire ([`Port::byte_time`]).
+    wire_free: Instant,
+    sleeper: spin_sleep::SpinSleeper,
 }
 
 /// A DIN line through a UART.
@@ -224,6 +265,8 @@ impl<P: Port> MidiPort<P> {
             backoff: FIRST_BACKOFF,
             finished: false,
             stats: PortStats::default(),
+            wire_free: Instant::now(),
+            sleeper: spin_sleep::SpinSleeper::default(),
         })
     }
 
@@ -250,10 +293,19 @@ impl<P: Port> MidiPort<P> {
         let Some(port) = self.port.as_mut() else {
             return;
         };
+        if P::byte_time().is_some() {
+            let now = Instant::now();
+            if self.wire_free > now {
+                self.sleeper.sleep(self.wire_free - now);
+            }
+        }
         match port.write_bytes(bytes) {
             Ok(()) => {
                 self.stats.bytes += bytes.len() as u64;
                 self.stats.writes += 1;
+                if let Some(byte) = P::byte_time() {
+                    self.wire_free = self.wire_free.max(Instant::now()) + byte * bytes.len() as u32;
+                }
             }
             Err(e) => {
                 self.stats.lost += 1;

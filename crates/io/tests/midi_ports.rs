@@ -308,20 +308,20 @@ fn a_panic_in_the_middle_of_a_piece_lets_go_of_every_key_as_it_unwinds() {
 
 #[test]
 fn a_serial_line_that_takes_no_bytes_is_given_up_within_the_write_timeout_not_hung_on() {
-    // Nobody reads the far end: the pty's buffer fills, and a write waits at most
-    // `WRITE_TIMEOUT` before the line counts as gone.
+    // Nobody reads the far end: the pty's buffer fills (100 000 bytes of note data under
+    // running status, more than it holds), and the write waits at most `WRITE_TIMEOUT` before
+    // the line counts as gone.
     let pty = nix::pty::openpty(None, None).unwrap();
     let path = nix::unistd::ttyname(&pty.slave).unwrap();
     let mut out = SerialOut::open(path.to_str().unwrap()).unwrap();
+    out.send(0, &[0x90, 60, 100]).unwrap();
+    assert!(out.connected());
+    let flood = [60u8, 100].repeat(50_000);
     let t = Instant::now();
-    let mut sent = 0u64;
-    while out.connected() {
-        out.send(sent, &[0x90, 60, 100]).unwrap();
-        sent += 1;
-        assert!(t.elapsed() < Duration::from_secs(10), "hung");
-    }
-    assert!(t.elapsed() < orch_io::midi::WRITE_TIMEOUT + Duration::from_secs(2));
-    assert!(sent > 100, "the pty took {sent} writes");
+    out.send(1, &flood).unwrap();
+    assert!(!out.connected(), "a full line is given up");
+    assert!(t.elapsed() >= orch_io::midi::WRITE_TIMEOUT);
+    assert!(t.elapsed() < orch_io::midi::WRITE_TIMEOUT + Duration::from_secs(1));
     assert_eq!(out.stats().lost, 1);
     drop(pty);
 }
