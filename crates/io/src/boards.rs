@@ -325,13 +325,11 @@ pub struct BoardsOut<I2C: TimedBus> {
 impl<I2C: TimedBus> BoardsOut<I2C> {
     /// A robot for `config` on `bus`, its boards at the addresses `config`'s layout names.
     pub fn new(config: Config<MAX_BOARDS>, bus: I2C) -> Result<Self, OutError> {
-        let addresses: Vec<u8> = config
-            .layout
-            .boards
-            .iter()
-            .filter(|b| b.keys > 0)
-            .map(|b| b.address)
-            .collect();
+        // Board i of the layout is board i of the set: every board up to the last one with
+        // keys (the layout's unused room after it has none).
+        let boards = &config.layout.boards;
+        let n = boards.iter().rposition(|b| b.keys > 0).map_or(0, |i| i + 1);
+        let addresses: Vec<u8> = boards[..n].iter().map(|b| b.address).collect();
         let boards = ResilientBoards::new(bus, &addresses)?;
         let robot = LocalRobot::new(config, boards).map_err(|e| OutError::Board(e.to_string()))?;
         Ok(Self {
