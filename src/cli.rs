@@ -91,6 +91,16 @@ pub struct PlayArgs {
     /// No live terminal view (it is off anyway when the output is not a terminal).
     #[arg(long)]
     pub no_view: bool,
+    /// Where to play, as many times as there are robots: sim (the default), serial:DEVICE,
+    /// rawmidi:DEVICE, udp:HOST:PORT, i2c:DEVICE or (built with the `alsa` feature)
+    /// alsa:CLIENT:PORT, each optionally followed by :ch=LIST (channels 1-16, e.g. :ch=1 or
+    /// :ch=2,4-6) to give it only those channels.
+    #[arg(long = "out", value_name = "OUT")]
+    pub outs: Vec<String>,
+    /// Log what the outputs do (reconnections, retries) on standard error; without it only
+    /// warnings (a device or a board lost, and back).
+    #[arg(long)]
+    pub verbose: bool,
 }
 
 #[derive(Args, Debug)]

@@ -3,6 +3,9 @@
 //!
 //! Host I/O lives here: reading files and standard input, the robot configuration, the live
 //! terminal view, and the engine that drives the core onto the virtual robot.
+//!
+//! Cargo feature `alsa` (off by default): `orch play --out alsa:CLIENT:PORT`, through
+//! orch-io's own `alsa` feature; it links alsa-lib (`libasound2-dev` to build).
 
 pub mod baton;
 pub mod cli;

@@ -7,6 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use orch_io::{Channels, OutSpec, OutStats, Output, Target};
 use orch_perform::{
     perform, realtime, song_events, Control, Link, Live, MidiRecording, Outcome, Played, Report,
     Setup, Spread, Tempo,
@@ -95,17 +96,104 @@ fn uncompensated(song: &Song, setup: &Setup) -> anyhow::Result<Option<Spread>> {
 }
 
 pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
+    init_logging(args.verbose);
     let song = load_song(&args.file)?;
     let robot = load_robot(args.robot.as_deref())?;
     let setup = setup(&robot, !args.no_compensation, tempo(args.tempo)?);
-    let played = if args.fast {
-        render(&song, &setup)?
+    let specs = out_specs(&args.outs)?;
+    if args.fast {
+        if let Some(s) = specs.iter().find(|s| s.target != Target::Sim) {
+            return Err(bad_input(format!(
+                "--fast renders on the virtual clock, as fast as the machine goes: it cannot \
+                 play --out {}; leave out --fast",
+                s.text
+            )));
+        }
+    }
+    let mut lanes = Vec::new();
+    for spec in specs {
+        let setup = Setup {
+            link: if spec.is_din() {
+                Link::Din
+            } else {
+                Link::Direct
+            },
+            ..setup.clone()
+        };
+        let out = Output::open(&spec.target, &setup.config)
+            .map_err(|e| bad_input(format!("--out {}: {e}", spec.text)))?;
+        lanes.push(Lane { spec, setup, out });
+    }
+    let played: Vec<(OutSpec, Played, Option<OutStats>)> = if args.fast {
+        lanes
+            .into_iter()
+            .map(|l| {
+                let (events, notes) = lane_events(&song, l.spec.channels);
+                let played = perform::<_, Output>(
+                    &l.setup,
+                    events.into_iter(),
+                    notes,
+                    None,
+                    &mut VirtualClock::new(),
+                    None,
+                    None,
+                )?;
+                Ok((l.spec, played, None))
+            })
+            .collect::<anyhow::Result<_>>()?
     } else {
-        play_live(song.clone(), &setup, args)?
+        play_live(song, lanes, args)?
     };
     // The comparison without compensation is `orch analyze`'s: a play renders once.
-    let report = played.report(None);
-    print_report(&report, args.json, &args.file)
+    print_reports(&played, args.json, &args.file, !args.outs.is_empty())
+}
+
+/// Logging through `tracing` on standard error: warnings (a device or a board lost, and back),
+/// everything the outputs do with `--verbose`.
+fn init_logging(verbose: bool) {
+    let level = if verbose {
+        tracing::Level::DEBUG
+    } else {
+        tracing::Level::WARN
+    };
+    let _ = tracing_subscriber::fmt()
+        .with_writer(std::io::stderr)
+        .with_max_level(level)
+        .with_target(false)
+        .try_init();
+}
+
+/// The `--out` options; the virtual robot alone when there is none.
+fn out_specs(outs: &[String]) -> anyhow::Result<Vec<OutSpec>> {
+    if outs.is_empty() {
+        return Ok(vec![OutSpec::parse("sim").expect("sim is an output")]);
+    }
+    outs.iter()
+        .map(|o| OutSpec::parse(o).map_err(|e| bad_input(e.to_string())))
+        .collect()
+}
+
+/// One robot of a performance: where it plays, how, and its opened output (none for the
+/// virtual robot alone).
+struct Lane {
+    spec: OutSpec,
+    setup: Setup,
+    out: Option<Output>,
+}
+
+/// The song's events for a robot that takes `channels`, and its notes.
+fn lane_events(song: &Song, channels: Channels) -> (Vec<orch_perform::ScoreEvent>, usize) {
+    if channels == Channels::ALL {
+        return (song_events(song).collect(), song.notes());
+    }
+    let events: Vec<_> = song_events(song)
+        .filter(|e| channels.passes(&e.bytes))
+        .collect();
+    let notes = events
+        .iter()
+        .filter(|e| e.bytes.note_on().is_some())
+        .count();
+    (events, notes)
 }
 
 /// Set by SIGINT, SIGTERM and SIGHUP: stop the way `q` does.
@@ -121,10 +209,35 @@ fn stop_on_signals() -> anyhow::Result<Arc<AtomicBool>> {
     Ok(flag)
 }
 
-/// Plays in real time: the sender on its own thread (real-time priority where allowed), the
-/// view on this one. `q`, SIGINT, SIGTERM and SIGHUP stop it with every key released, and the
-/// report still comes.
-fn play_live(song: Song, setup: &Setup, args: &PlayArgs) -> anyhow::Result<Played> {
+/// Stops every robot when the thread it lives on panics (its output, dropped on the way, has
+/// let go of its keys).
+struct StopOnPanic(Arc<Control>);
+
+impl Drop for StopOnPanic {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.stop();
+        }
+    }
+}
+
+type LaneResult = Result<(Played, Option<OutStats>), orch_perform::PerformError>;
+
+/// A robot's sender thread, with where it stands.
+type Sender = (
+    OutSpec,
+    std::thread::JoinHandle<(realtime::Priority, LaneResult)>,
+    Arc<Mutex<Option<Live>>>,
+);
+
+/// Plays in real time: one sender thread per robot (real-time priority where allowed), all on
+/// one clock, the view on this thread. `q`, SIGINT, SIGTERM and SIGHUP stop every robot with
+/// every key released, and the reports still come; so does a panic, on any thread.
+fn play_live(
+    song: Song,
+    lanes: Vec<Lane>,
+    args: &PlayArgs,
+) -> anyhow::Result<Vec<(OutSpec, Played, Option<OutStats>)>> {
     let signalled = stop_on_signals()?;
     let show = !args.no_view && std::io::stdout().is_terminal();
     let title = args
@@ -132,81 +245,291 @@ fn play_live(song: Song, setup: &Setup, args: &PlayArgs) -> anyhow::Result<Playe
         .file_name()
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
     let control = Control::new();
-    let live: Arc<Mutex<Option<Live>>> = Arc::new(Mutex::new(None));
     let song = Arc::new(song);
-    let sender = {
-        let (setup, control, live, song) = (
-            setup.clone(),
-            Arc::clone(&control),
-            Arc::clone(&live),
-            Arc::clone(&song),
-        );
-        realtime::spawn(move || {
-            let mut clock = realtime::PreciseClock::new();
+    let origin = std::time::Instant::now();
+    let (low, tempo) = match lanes.first() {
+        Some(l) => (l.setup.config.range.low().get(), l.setup.tempo),
+        None => return Ok(Vec::new()),
+    };
+    let mut senders = Vec::new();
+    let mut notes_total = 0u64;
+    for lane in lanes {
+        let Lane {
+            spec,
+            setup,
+            mut out,
+        } = lane;
+        let (events, notes) = lane_events(&song, spec.channels);
+        notes_total += notes as u64;
+        let live: Arc<Mutex<Option<Live>>> = Arc::new(Mutex::new(None));
+        let (control, live_in) = (Arc::clone(&control), Arc::clone(&live));
+        let sender = realtime::spawn(move || -> LaneResult {
+            let _guard = StopOnPanic(Arc::clone(&control));
+            let mut clock = realtime::PreciseClock::starting_at(origin);
             let mut on_live = |l: &Live| {
-                *live.lock().unwrap_or_else(|e| e.into_inner()) = Some(l.clone());
+                *live_in.lock().unwrap_or_else(|e| e.into_inner()) = Some(l.clone());
             };
-            perform::<_, MidiRecording>(
+            let played = perform::<_, Output>(
                 &setup,
-                song_events(&song),
-                song.notes(),
-                None,
+                events.into_iter(),
+                notes,
+                out.as_mut(),
                 &mut clock,
                 Some(&control),
                 Some(&mut on_live),
-            )
-        })
-    };
-    let mut view = if show { Some(View::start()?) } else { None };
-    let low = setup.config.range.low().get();
-    let total_s = song.duration_us() as f64 / 1e6 / setup.tempo.get();
-    let mut view_error = None;
-    while !sender.is_finished() {
-        if signalled.load(Ordering::SeqCst) {
-            control.stop();
-        }
-        if let Some(v) = view.as_mut() {
-            if crate::view::quit_requested() {
+            )?;
+            Ok((played, out.as_ref().map(Output::stats)))
+        });
+        senders.push((spec, sender, live));
+    }
+    let watch = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let mut view = if show { Some(View::start()?) } else { None };
+        let total_s = song.duration_us() as f64 / 1e6 / tempo.get();
+        let mut view_error = None;
+        while !senders.iter().all(|(_, s, _)| s.is_finished()) {
+            if signalled.load(Ordering::SeqCst) {
                 control.stop();
             }
-            let snapshot = live.lock().unwrap_or_else(|e| e.into_inner()).clone();
-            if let Some(l) = snapshot {
-                let (bar, beat) = song.bar_beat(l.song_us);
-                let scene = Scene {
-                    title: title.clone(),
-                    low_note: low,
-                    down: l.keys_down,
-                    bar,
-                    beat,
-                    bpm: song.tempo_at(l.song_us).bpm() * l.tempo,
-                    elapsed_s: l.song_us as f64 / 1e6 / l.tempo,
-                    total_s,
-                    notes_sent: l.notes_sent,
-                    notes: song.notes() as u64,
-                };
-                if let Err(e) = v.draw(&scene) {
-                    view_error = Some(e);
+            if let Some(v) = view.as_mut() {
+                if crate::view::quit_requested() {
                     control.stop();
                 }
+                if let Some(scene) = scene(&senders, &song, &title, low, total_s, notes_total) {
+                    if let Err(e) = v.draw(&scene) {
+                        view_error = Some(e);
+                        control.stop();
+                    }
+                }
+            } else {
+                std::thread::sleep(Duration::from_millis(20));
             }
-        } else {
-            std::thread::sleep(Duration::from_millis(20));
+        }
+        drop(view);
+        anyhow::Ok(view_error)
+    }));
+    if watch.is_err() {
+        // The view panicked: stop the robots and let them go before the panic goes on.
+        control.stop();
+    }
+    let mut played = Vec::new();
+    let mut failed = None;
+    let mut warned = false;
+    for (spec, sender, _) in senders {
+        match sender.join() {
+            Ok((priority, Ok((p, stats)))) => {
+                if priority != realtime::Priority::Realtime && !warned {
+                    warned = true;
+                    eprintln!(
+                        "orch: note: the OS refused real-time priority to the sender \
+                         ({priority:?}); under load its messages may be late (see lateness in \
+                         the report)"
+                    );
+                }
+                played.push((spec, p, stats))
+            }
+            Ok((_raised, Err(e))) => {
+                failed.get_or_insert(anyhow::Error::new(e).context(format!("--out {}", spec.text)));
+            }
+            Err(_) => {
+                failed.get_or_insert(anyhow::anyhow!(
+                    "the sender thread of --out {} panicked (its keys were released)",
+                    spec.text
+                ));
+            }
         }
     }
-    drop(view);
-    let (priority, played) = sender
-        .join()
-        .map_err(|_| anyhow::anyhow!("the sender thread panicked"))?;
-    if priority != realtime::Priority::Realtime {
-        eprintln!(
-            "orch: note: the OS refused real-time priority to the sender ({priority:?}); \
-             under load its messages may be late (see lateness in the report)"
-        );
+    match watch {
+        Err(panic) => std::panic::resume_unwind(panic),
+        Ok(Err(e)) => return Err(e),
+        Ok(Ok(Some(e))) => return Err(e.into()),
+        Ok(Ok(None)) => {}
     }
-    if let Some(e) = view_error {
-        return Err(e.into());
+    match failed {
+        Some(e) => Err(e),
+        None => Ok(played),
     }
-    Ok(played?)
+}
+
+/// What the view shows: every robot's keys together, where the first robot stands.
+fn scene(
+    senders: &[Sender],
+    song: &Song,
+    title: &str,
+    low: u8,
+    total_s: f64,
+    notes: u64,
+) -> Option<Scene> {
+    let mut all: Option<Live> = None;
+    let mut sent = 0;
+    for (_, _, live) in senders {
+        let Some(l) = live.lock().unwrap_or_else(|e| e.into_inner()).clone() else {
+            continue;
+        };
+        sent += l.notes_sent;
+        match all.as_mut() {
+            None => all = Some(l),
+            Some(a) => {
+                for (d, k) in a.keys_down.iter_mut().zip(&l.keys_down) {
+                    *d |= *k;
+                }
+            }
+        }
+    }
+    let l = all?;
+    let (bar, beat) = song.bar_beat(l.song_us);
+    Some(Scene {
+        title: title.to_string(),
+        low_note: low,
+        down: l.keys_down,
+        bar,
+        beat,
+        bpm: song.tempo_at(l.song_us).bpm() * l.tempo,
+        elapsed_s: l.song_us as f64 / 1e6 / l.tempo,
+        total_s,
+        notes_sent: sent,
+        notes,
+    })
+}
+
+/// What happened on an output, for the report.
+#[derive(Serialize)]
+#[serde(untagged)]
+enum LinkFigures {
+    Port {
+        bytes: u64,
+        writes: u64,
+        lost: u64,
+        reconnected: u64,
+        dropped_bytes: u64,
+    },
+    Boards {
+        retries: u64,
+        failed_writes: u64,
+        boards_lost: u64,
+        boards_reinitialised: u64,
+    },
+}
+
+impl From<OutStats> for LinkFigures {
+    fn from(s: OutStats) -> Self {
+        match s {
+            OutStats::Port(p) => LinkFigures::Port {
+                bytes: p.bytes,
+                writes: p.writes,
+                lost: p.lost,
+                reconnected: p.reconnected,
+                dropped_bytes: p.dropped_bytes,
+            },
+            OutStats::Boards(b) => LinkFigures::Boards {
+                retries: b.retries,
+                failed_writes: b.failed_writes,
+                boards_lost: b.lost,
+                boards_reinitialised: b.reinitialised,
+            },
+        }
+    }
+}
+
+impl LinkFigures {
+    fn text(&self) -> String {
+        match self {
+            LinkFigures::Port {
+                bytes,
+                writes,
+                lost,
+                reconnected,
+                dropped_bytes,
+            } => format!(
+                "{bytes} bytes in {writes} writes; lost {lost} times, back {reconnected} \
+                 times, {dropped_bytes} bytes not sent"
+            ),
+            LinkFigures::Boards {
+                retries,
+                failed_writes,
+                boards_lost,
+                boards_reinitialised,
+            } => format!(
+                "{failed_writes} failed writes, {retries} retries; boards lost {boards_lost} \
+                 times, re-initialised {boards_reinitialised} times"
+            ),
+        }
+    }
+}
+
+/// One robot's report: where it played, the channels it took, its output's figures.
+#[derive(Serialize)]
+struct RobotReport<'a> {
+    out: &'a str,
+    channels: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    link: Option<LinkFigures>,
+    #[serde(flatten)]
+    report: Report,
+}
+
+fn print_reports(
+    played: &[(OutSpec, Played, Option<OutStats>)],
+    json: bool,
+    file: &Path,
+    named: bool,
+) -> anyhow::Result<()> {
+    if !named {
+        if let [(_, p, _)] = played {
+            return print_report(&p.report(None), json, file);
+        }
+    }
+    let robots: Vec<RobotReport> = played
+        .iter()
+        .map(|(spec, p, stats)| RobotReport {
+            out: &spec.text,
+            channels: spec.channels.to_string(),
+            link: stats.map(LinkFigures::from),
+            report: p.report(None),
+        })
+        .collect();
+    for r in &robots {
+        if let Some(LinkFigures::Port { lost, .. }) = r.link {
+            if lost > 0 {
+                eprintln!(
+                    "orch: --out {}: the device went away {lost} times during the performance",
+                    r.out
+                );
+            }
+        }
+    }
+    let mut out = std::io::stdout().lock();
+    if json {
+        if let [one] = robots.as_slice() {
+            writeln!(out, "{}", serde_json::to_string(one)?)?;
+        } else {
+            writeln!(
+                out,
+                "{}",
+                serde_json::to_string(&serde_json::json!({ "robots": robots }))?
+            )?;
+        }
+        return Ok(());
+    }
+    writeln!(out, "{}", file.display())?;
+    for (i, r) in robots.iter().enumerate() {
+        writeln!(out)?;
+        writeln!(
+            out,
+            "robot {}: {} (channels {})",
+            i + 1,
+            r.out,
+            if r.channels.split(',').count() == 16 {
+                "all".to_string()
+            } else {
+                r.channels.clone()
+            }
+        )?;
+        if let Some(l) = &r.link {
+            writeln!(out, "  output: {}", l.text())?;
+        }
+        write!(out, "{}", r.report.text())?;
+    }
+    Ok(())
 }
 
 fn print_report(report: &Report, json: bool, file: &Path) -> anyhow::Result<()> {

@@ -38,6 +38,24 @@ pub trait MidiOut {
     /// Sends one message's bytes (with running status where it applies) at `t_us` on the
     /// performer's clock.
     fn send(&mut self, t_us: u64, bytes: &[u8]) -> Result<(), Self::Error>;
+
+    /// When the output must next be called with [`poll`](Self::poll), µs on the performer's
+    /// clock, if ever: a robot driven from this host has guard timers (a delayed re-strike,
+    /// the shortest press) that fire between messages. A byte sink has none.
+    fn next_deadline(&self) -> Option<u64> {
+        None
+    }
+
+    /// Runs what is due at `t_us` (see [`next_deadline`](Self::next_deadline)).
+    fn poll(&mut self, _t_us: u64) -> Result<(), Self::Error> {
+        Ok(())
+    }
+
+    /// The performance ends at `t_us`, played out or stopped, after the All Notes Off on every
+    /// channel: let go of everything that is still held.
+    fn finish(&mut self, _t_us: u64) -> Result<(), Self::Error> {
+        Ok(())
+    }
 }
 
 /// A [`MidiOut`] that keeps what it was given: for tests and for `--out` dry runs.

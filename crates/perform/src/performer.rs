@@ -364,10 +364,18 @@ where
         // stored, and only while something could be cut: memory and time follow the events,
         // never the length of a silence).
         let busy = robot.interpreter().next_deadline().is_some();
-        let due = match last_byte {
+        let mut due = match last_byte {
             Some(b) if busy && next > b + KEEP_ALIVE_US => (b + KEEP_ALIVE_US, true),
             _ => (next, false),
         };
+        // An output with timers of its own (a robot driven from this host) is called at them.
+        let mut poll = false;
+        if let Out::Midi { out, .. } = &out {
+            if let Some(d) = out.next_deadline().filter(|&d| d < due.0) {
+                due = (d.max(last_at), false);
+                poll = true;
+            }
+        }
         if let Some(l) = live.as_deref_mut() {
             // Wake at least every 40 ms to show where the song is and to look at `control`;
             // the last stretch before a send is one precise wait, with nothing else in it.
@@ -404,6 +412,13 @@ where
             }
         } else {
             clock.wait_until(due.0);
+        }
+        if poll {
+            if let Out::Midi { out, .. } = &mut out {
+                out.poll(due.0)
+                    .map_err(|e| PerformError::Midi(Box::new(e)))?;
+            }
+            continue;
         }
         if due.1 {
             deliver(
@@ -491,6 +506,9 @@ where
                 &mut robot,
                 &mut ledger,
             )?;
+        }
+        if let Out::Midi { out, .. } = &mut out {
+            out.finish(t).map_err(|e| PerformError::Midi(Box::new(e)))?;
         }
         last_at = t;
     }

@@ -20,8 +20,14 @@ pub struct PreciseClock {
 impl PreciseClock {
     /// A clock starting now.
     pub fn new() -> Self {
+        Self::starting_at(Instant::now())
+    }
+
+    /// A clock whose 0 is `start`: performances on several threads (one per output) that
+    /// share it play in step.
+    pub fn starting_at(start: Instant) -> Self {
         Self {
-            start: Instant::now(),
+            start,
             sleeper: spin_sleep::SpinSleeper::default(),
             samples: Vec::new(),
         }

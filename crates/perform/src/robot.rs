@@ -124,6 +124,12 @@ impl<B: Boards> LocalRobot<B> {
         &self.boards
     }
 
+    /// The boards, to drive between the interpreter's writes (retry a lost board, say). What
+    /// is written there must be what the interpreter last wrote (or all fingers up).
+    pub fn boards_mut(&mut self) -> &mut B {
+        &mut self.boards
+    }
+
     /// Note decisions since the last call, in order.
     pub fn take_decided(&mut self) -> Vec<Decided> {
         std::mem::take(&mut self.decided)

@@ -125,4 +125,3 @@ fn the_streaming_planner_equals_planning_the_whole_song() {
         }
     }
 }
-
