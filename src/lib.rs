@@ -16,6 +16,7 @@ pub mod input;
 pub mod interpret;
 pub mod play;
 pub mod robot;
+pub mod run;
 pub mod show;
 pub mod view;
 
@@ -28,5 +29,6 @@ pub fn run(command: cli::Command) -> anyhow::Result<()> {
         cli::Command::Analyze(args) => play::run_analyze(&args),
         cli::Command::Config => robot::print_default(),
         cli::Command::Baton(args) => baton::run(&args),
+        cli::Command::Run(args) => run::run(&args),
     }
 }
