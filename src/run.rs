@@ -248,7 +248,9 @@ impl Thru {
                 while let Ok(Some(bytes)) = rx.recv() {
                     out.send(t(), &bytes).map_err(|e| e.to_string())?;
                 }
-                out.send(t(), &all_notes_off()).map_err(|e| e.to_string())?;
+                for m in all_notes_off().chunks(3) {
+                    out.send(t(), m).map_err(|e| e.to_string())?;
+                }
                 out.finish(t()).map_err(|e| e.to_string())
             })?;
         Ok(Thru {
@@ -388,7 +390,12 @@ struct Runner {
     framer: Framer,
     pending: Option<Robot>,
     robot_path: Option<std::path::PathBuf>,
+    /// The input is a DIN line: a read's bytes arrived 320 µs apart.
+    din: bool,
 }
+
+/// One byte on a DIN MIDI line: 10 bits at 31 250 baud.
+const DIN_BYTE: Duration = Duration::from_micros(320);
 
 impl Runner {
     fn now_us(&self) -> u64 {
@@ -426,12 +433,26 @@ impl Runner {
         Ok(())
     }
 
+    /// Feeds one read. On a DIN line (`din`) the bytes of a read came in one after the other,
+    /// 320 µs apart, the last of them when the read returned: each is fed at that time
+    /// (never before the byte fed before it), not all at the time of the read.
     fn bytes(&mut self, at: Wall, bytes: &[u8]) -> anyhow::Result<()> {
-        let origin = *self.origin.get_or_insert(at);
-        let t_us = (at.saturating_duration_since(origin).as_micros() as u64).max(self.last_us);
-        self.last_us = t_us;
+        let din = self.din;
+        let spread = |k: usize| -> Duration {
+            if din {
+                DIN_BYTE * (bytes.len() - 1 - k) as u32
+            } else {
+                Duration::ZERO
+            }
+        };
+        let first = at.checked_sub(spread(0)).unwrap_or(at);
+        let origin = *self.origin.get_or_insert(first);
         self.reads += 1;
-        for &byte in bytes {
+        for (k, &byte) in bytes.iter().enumerate() {
+            let arrived = at.checked_sub(spread(k)).unwrap_or(at);
+            let t_us =
+                (arrived.saturating_duration_since(origin).as_micros() as u64).max(self.last_us);
+            self.last_us = t_us;
             self.timers(t_us)?;
             self.interp.feed(byte, Instant::from_micros(t_us));
             self.flush(t_us, Some(self.index))?;
@@ -621,7 +642,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         framer: Framer::default(),
         pending: None,
         robot_path: args.robot.clone(),
+        din: matches!(input, InTarget::Serial(_)),
     };
+    let priority = orch_perform::realtime::raise_priority();
+    tracing::debug!(?priority, "the robot's loop");
     let title = format!("orch run --in {}", args.input);
     let mut view = if show { Some(View::start()?) } else { None };
     let end = main_loop(&mut runner, &rx, args.verbose, view.as_mut(), &title);

@@ -12,7 +12,8 @@
 //! | `udp:0.0.0.0:5004` | the same on every address (or any `HOST:PORT` to bind) |
 //! | `-` | standard input |
 //!
-//! [`MidiIn::open`] starts a reader thread that stamps each read with the host's monotonic
+//! [`MidiIn::open`] starts a reader thread (at real-time priority where the OS allows it)
+//! that stamps each read with the host's monotonic
 //! clock ([`std::time::Instant`]) the moment it returns, and sends it as an [`InEvent`] on a
 //! channel the caller owns, so that the caller can wait on input, its own timers and
 //! anything else (signals) in one place. The end of the input (a file or standard input at
@@ -212,7 +213,13 @@ impl MidiIn {
             let hung_up_ends = matches!(target, InTarget::Serial(_));
             std::thread::Builder::new()
                 .name(format!("orch-in {name}"))
-                .spawn(move || read_loop(source, &stop, hung_up_ends, &events))
+                .spawn(move || {
+                    // A read stamped late is a byte fed late: the reader runs at real-time
+                    // priority where the OS allows it.
+                    let priority = orch_perform::realtime::raise_priority();
+                    tracing::debug!(?priority, "input reader");
+                    read_loop(source, &stop, hung_up_ends, &events)
+                })
                 .map_err(|e| open_err(&name, e))?
         };
         Ok(MidiIn {
