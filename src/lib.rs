@@ -1,5 +1,5 @@
 //! The `orch` program's pieces, so that tests can reach them; `main.rs` only parses the
-//! arguments and calls [`run`].
+//! arguments and calls [`run()`].
 //!
 //! Host I/O lives here: reading files and standard input, the robot configuration, the live
 //! terminal view, and the engine that drives the core onto the virtual robot.

@@ -13,7 +13,7 @@ use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::time::{Duration, Instant as Wall};
 
 use anyhow::Context;
-use orch_core::{BoardId, Counters, FingerBoards, Instant, Stats};
+use orch_core::{BoardId, Counters, FingerBoards, Instant, KeyPhase, Stats};
 use orch_io::{
     midi::all_notes_off, open_i2c, Channels, InEvent, InTarget, LinuxI2c, MidiIn, OutSpec, Output,
     ResilientBoards, Target,
@@ -407,13 +407,9 @@ impl Runner {
     fn flush(&mut self, t_us: u64, byte: Option<u64>) -> anyhow::Result<()> {
         self.tap.set_time(t_us);
         self.tap.byte = byte;
-        self.interp.flush(&mut self.tap).map_err(|e| {
-            anyhow::anyhow!(
-                "board {:#04x} failed: {}",
-                e.board.address,
-                e.error.to_string()
-            )
-        })?;
+        self.interp
+            .flush(&mut self.tap)
+            .map_err(|e| anyhow::anyhow!("board {:#04x} failed: {}", e.board.address, e.error))?;
         Ok(())
     }
 
@@ -466,9 +462,10 @@ impl Runner {
         Ok(())
     }
 
-    /// SIGHUP: reads robot.toml again. The new configuration takes over the first moment no
-    /// key is down, no timer waits and no message is half received, so no held key is
-    /// dropped; a refused file leaves the old one in force.
+    /// SIGHUP: reads robot.toml again. The new configuration takes over the first moment
+    /// every key is up (none down, waiting to strike or resting before a re-strike) and no
+    /// message is half received, so no held key is dropped; a refused file leaves the old
+    /// one in force.
     fn reload(&mut self) {
         let Some(path) = self.robot_path.clone() else {
             eprintln!("orch: SIGHUP: no --robot file to read again; the thesis's robot stays");
@@ -505,11 +502,19 @@ impl Runner {
     }
 
     fn apply_pending(&mut self) -> anyhow::Result<()> {
-        if self.pending.is_none()
-            || self.interp.keys_down() != 0
-            || self.interp.next_deadline().is_some()
-            || !self.framer.idle()
-        {
+        if self.pending.is_none() {
+            return Ok(());
+        }
+        // A key's rest before a re-strike ends on a tick: one now (if the stream has begun).
+        if self.origin.is_some() {
+            let now = self.now_us();
+            self.timers(now)?;
+            self.interp.tick(Instant::from_micros(now));
+            self.flush(now, None)?;
+        }
+        let keys = self.interp.config().range.keys();
+        let all_up = (0..keys).all(|k| self.interp.key_phase(k as u8) == KeyPhase::Up);
+        if self.pending.is_none() || !all_up || !self.framer.idle() {
             return Ok(());
         }
         let Some(new) = self.pending.take() else {

@@ -537,8 +537,7 @@ fn flood_and_garbage_lose_no_message_and_are_counted() {
     all_released(&writes(&v).1);
     let line = err
         .lines()
-        .filter(|l| l.starts_with("orch run: "))
-        .last()
+        .rfind(|l| l.starts_with("orch run: "))
         .unwrap_or_else(|| panic!("no counters line: {err}"));
     let want = interpret_counters(&bytes);
     let num = |after: &str| -> u64 {
@@ -619,4 +618,81 @@ fn thru_passes_the_chosen_channels_on() {
     );
     // Then All Notes Off on every channel.
     assert_eq!(got.len(), 3 + 16, "{got:?}");
+}
+
+fn signal(child: &Child, s: nix::sys::signal::Signal) {
+    nix::sys::signal::kill(nix::unistd::Pid::from_raw(child.id() as i32), s).unwrap();
+}
+
+fn wait_for(what: &str, text: &Mutex<String>) {
+    let t0 = Instant::now();
+    while !text.lock().unwrap().contains(what) {
+        assert!(
+            t0.elapsed() < Duration::from_secs(10),
+            "never said `{what}`: {}",
+            text.lock().unwrap()
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// SIGHUP reads robot.toml again: a bad file is refused and the old robot plays on; a good one
+/// takes over once no key is down, with no held key dropped. SIGUSR1 prints the counters.
+#[test]
+fn sighup_reloads_without_dropping_held_keys_and_sigusr1_counts() {
+    let out = Command::new(ORCH).arg("config").output().unwrap();
+    let default = String::from_utf8(out.stdout).unwrap();
+    let robot = tempfile_path::TempPath::write("reload.toml", &default);
+    let mut child = run_orch(
+        &[
+            "--in",
+            "-",
+            "--json",
+            "--verbose",
+            "--robot",
+            robot.as_str(),
+        ],
+        Stdio::piped(),
+    );
+    let mut stdin = child.stdin.take().unwrap();
+    let (lines, reader) = collect_lines(child.stdout.take().unwrap());
+    let (stderr, ready) = collect_stderr(&mut child);
+    wait_ready(&ready, &stderr);
+    stdin.write_all(&[0x90, 60, 100]).unwrap();
+    stdin.flush().unwrap();
+    let t0 = Instant::now();
+    while lines.lock().unwrap().is_empty() {
+        assert!(t0.elapsed() < Duration::from_secs(10));
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    std::fs::write(&robot.0, "[guard]\nmax_keys_down = \"many\"\n").unwrap();
+    signal(&child, nix::sys::signal::Signal::SIGHUP);
+    wait_for("refused, the robot stays as it was", &stderr);
+    let one_key = default.replace("max_keys_down = 16", "max_keys_down = 1");
+    assert_ne!(one_key, default);
+    std::fs::write(&robot.0, one_key).unwrap();
+    signal(&child, nix::sys::signal::Signal::SIGHUP);
+    wait_for("it takes over when no key is down", &stderr);
+    signal(&child, nix::sys::signal::Signal::SIGUSR1);
+    wait_for("keys down", &stderr);
+    assert!(stderr.lock().unwrap().contains("1 keys down"));
+    // The key is still down: nothing was written since its press.
+    assert_eq!(lines.lock().unwrap().len(), 1);
+    stdin.write_all(&[0x80, 60, 0]).unwrap();
+    stdin.flush().unwrap();
+    wait_for("the new robot configuration is in force", &stderr);
+    // Two notes at once: the new power budget takes one.
+    stdin.write_all(&[0x90, 62, 100, 64, 100]).unwrap();
+    drop(stdin);
+    assert!(wait_exit(&mut child, Duration::from_secs(5)).success());
+    reader.join().unwrap();
+    let v: Vec<Value> = lines.lock().unwrap().iter().map(|l| l.1.clone()).collect();
+    let (ws, fin) = writes(&v);
+    all_released(&fin);
+    let seq: Vec<(u64, u64)> = ws.iter().map(|w| (w.address, w.outputs)).collect();
+    assert_eq!(
+        seq,
+        [(0x22, 1 << 8), (0x22, 0), (0x22, 1 << 10), (0x22, 0)],
+        "{ws:?}"
+    );
 }
