@@ -97,14 +97,19 @@ impl Tap {
 
     /// Housekeeping between writes: lost I2C boards tried again, the virtual robot's
     /// presses counted (and not kept).
-    fn poll(&mut self) {
+    fn poll(&mut self, now_us: u64) {
         match &mut self.out {
             Out::Sim(b) => {
                 let mut n = 0;
                 b.bus_mut().drain_presses(|_| n += 1);
                 self.strikes += n;
             }
-            Out::I2c(b) => b.retry_lost(),
+            Out::I2c(b) => {
+                if !b.lost_now().is_empty() {
+                    b.set_time(Instant::from_micros(now_us.max(self.t_us)));
+                    b.retry_lost();
+                }
+            }
         }
     }
 }
@@ -752,7 +757,8 @@ fn main_loop(
             return End::Failed(e);
         }
         r.tap.flush_log();
-        r.tap.poll();
+        let now = r.now_us();
+        r.tap.poll(now);
         if verbose && activity && last_line.elapsed() >= Duration::from_secs(1) {
             eprintln!("{}", r.counters_line());
             last_line = Wall::now();
