@@ -696,3 +696,48 @@ fn sighup_reloads_without_dropping_held_keys_and_sigusr1_counts() {
         "{ws:?}"
     );
 }
+
+/// With `--out sim` on a terminal (tmux), the live view shows the keys held by the input;
+/// `q` stops: the terminal comes back and orch exits 0.
+#[test]
+fn live_view_shows_the_held_keys_and_q_stops() {
+    assert!(
+        Command::new("tmux").arg("-V").output().is_ok(),
+        "tmux is needed for this test; scripts/test.sh installs it"
+    );
+    let port = UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let socket = format!("orch-run-view-{}", std::process::id());
+    let tmux = |args: &[&str]| {
+        Command::new("tmux")
+            .args(["-L", &socket, "-f", "/dev/null"])
+            .args(args)
+            .env("TERM", "xterm-256color")
+            .output()
+            .unwrap()
+    };
+    let command = format!("{ORCH} run --in udp:{port}; echo EXIT=$?; sleep 10");
+    let started = tmux(&["new-session", "-d", "-x", "100", "-y", "30", &command]);
+    assert!(started.status.success());
+    let s = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let t0 = Instant::now();
+    let mut screen = String::new();
+    while !screen.contains("down: C4 E4 G4") && t0.elapsed() < Duration::from_secs(10) {
+        // Sent again until seen: the view may not have started when the first ones came.
+        s.send_to(&[0x90, 60, 100, 64, 100, 67, 100], ("127.0.0.1", port))
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(200));
+        screen = String::from_utf8_lossy(&tmux(&["capture-pane", "-p"]).stdout).into_owned();
+    }
+    tmux(&["send-keys", "q"]);
+    std::thread::sleep(Duration::from_millis(1000));
+    let after = String::from_utf8_lossy(&tmux(&["capture-pane", "-p"]).stdout).into_owned();
+    tmux(&["kill-server"]);
+    assert!(screen.contains("down: C4 E4 G4"), "{screen}");
+    assert!(screen.contains("61 keys"), "{screen}");
+    assert!(after.contains("EXIT=0"), "{after}");
+    assert!(!after.contains("down: "), "the view is gone: {after}");
+}
