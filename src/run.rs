@@ -12,7 +12,6 @@ use std::io::{BufWriter, IsTerminal, Stdout, Write};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::time::{Duration, Instant as Wall};
 
-use anyhow::Context;
 use orch_core::{BoardId, Counters, FingerBoards, Instant, KeyPhase, Stats};
 use orch_io::{
     midi::all_notes_off, open_i2c, Channels, InEvent, InTarget, LinuxI2c, MidiIn, OutSpec, Output,
@@ -242,7 +241,7 @@ struct Thru {
 impl Thru {
     fn start(spec: OutSpec, robot: &Robot) -> anyhow::Result<Thru> {
         let mut out = Output::open(&spec.target, &robot.config)
-            .with_context(|| format!("--thru {}", spec.text))?
+            .map_err(|e| bad_input(format!("--thru {}: {e}", spec.text)))?
             .ok_or_else(|| bad_input("--thru sim: the virtual robot is --out sim"))?;
         let (tx, rx) = mpsc::channel::<Option<Vec<u8>>>();
         let thread = std::thread::Builder::new()

@@ -575,6 +575,7 @@ fn bad_input_or_output_exits_2() {
         &["--in", "-", "--out", "udp:127.0.0.1:9"],
         &["--in", "-", "--thru", "sim"],
         &["--in", "rawmidi:/nonexistent/midi"],
+        &["--in", "-", "--thru", "rawmidi:/nonexistent/midi"],
     ] {
         let out = Command::new(ORCH)
             .arg("run")
