@@ -27,6 +27,9 @@ pub enum Command {
     Config,
     /// Follow a conductor's baton (a red LED at its tip) in a video and print each beat.
     Baton(BatonArgs),
+    /// Play live MIDI on the robot: bytes in (serial, raw MIDI, UDP, stdin), the interpreter
+    /// and its guard, finger boards out (the virtual robot or I2C), the stream passed on.
+    Run(RunArgs),
 }
 
 /// Where the bytes come from and how they are written.
@@ -129,4 +132,34 @@ pub struct BatonArgs {
     /// One JSON object a line: {"t_ms":T,"bpm":B,"x":X,"y":Y}.
     #[arg(long)]
     pub json: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct RunArgs {
+    /// Where the MIDI bytes come from: serial:DEVICE (a DIN line, 31250 baud),
+    /// rawmidi:DEVICE (or any file or FIFO), udp:PORT (datagrams on loopback), udp:HOST:PORT,
+    /// or - (standard input).
+    #[arg(long = "in", value_name = "IN")]
+    pub input: String,
+    /// The robot: sim (the virtual robot) or i2c:DEVICE (PCA9555 finger boards).
+    #[arg(long, value_name = "OUT", default_value = "sim")]
+    pub out: String,
+    /// Pass the input on to a MIDI output (serial:, rawmidi:, udp:HOST:PORT), whole or only
+    /// some channels (:ch=LIST), re-encoded message by message; as many as wanted.
+    #[arg(long, value_name = "OUT")]
+    pub thru: Vec<String>,
+    /// The robot's configuration (see `orch config`); the thesis's robot if not given.
+    /// SIGHUP reads it again.
+    #[arg(long, value_name = "FILE")]
+    pub robot: Option<PathBuf>,
+    /// Print every board write as `orch interpret --json` does, t_us from the first input byte.
+    #[arg(long)]
+    pub json: bool,
+    /// No live terminal view (it is off anyway when the output is not a terminal).
+    #[arg(long)]
+    pub no_view: bool,
+    /// A counters line on standard error every second of input and at the end (SIGUSR1 asks
+    /// for one at any time); what the outputs do.
+    #[arg(long)]
+    pub verbose: bool,
 }

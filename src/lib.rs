@@ -1,5 +1,5 @@
 //! The `orch` program's pieces, so that tests can reach them; `main.rs` only parses the
-//! arguments and calls [`run`].
+//! arguments and calls [`run()`].
 //!
 //! Host I/O lives here: reading files and standard input, the robot configuration, the live
 //! terminal view, and the engine that drives the core onto the virtual robot.
@@ -16,6 +16,7 @@ pub mod input;
 pub mod interpret;
 pub mod play;
 pub mod robot;
+pub mod run;
 pub mod show;
 pub mod view;
 
@@ -28,5 +29,6 @@ pub fn run(command: cli::Command) -> anyhow::Result<()> {
         cli::Command::Analyze(args) => play::run_analyze(&args),
         cli::Command::Config => robot::print_default(),
         cli::Command::Baton(args) => baton::run(&args),
+        cli::Command::Run(args) => run::run(&args),
     }
 }

@@ -10,6 +10,8 @@
 //! - Finger boards on the host's own I2C bus ([`boards`]): orch-core's interpreter and guard
 //!   on `orch-boards`' PCA9555 driver ([`BoardsOut`]), with retries, lost boards played
 //!   around and re-initialised when they answer again ([`ResilientBoards`]).
+//! - MIDI inputs for `orch run --in` ([`input`]): a UART at 31 250 baud, a raw MIDI device
+//!   or file, UDP datagrams, standard input; each read stamped with the host's monotonic clock.
 //! - `--out` specifications ([`spec`]): `serial:/dev/ttyUSB0`, `udp:HOST:PORT:ch=2`, …
 //!
 //! Every output lets go of every key when the performance ends, when it is stopped and when
@@ -37,12 +39,14 @@
 #[cfg(feature = "alsa")]
 pub mod alsa_seq;
 pub mod boards;
+pub mod input;
 pub mod midi;
 pub mod spec;
 
 use std::fmt;
 
 pub use boards::{open_i2c, BoardStats, BoardsOut, LinuxI2c, ResilientBoards, TimedBus};
+pub use input::{InEvent, InSpecError, InTarget, MidiIn};
 pub use midi::{MidiPort, Port, PortStats, RawMidiOut, SerialOut, UdpOut};
 pub use spec::{Channels, OutSpec, SpecError, Target};
 
