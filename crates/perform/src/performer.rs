@@ -12,7 +12,7 @@ use crate::link::{DinWire, Link, MidiOut, RunningStatus};
 use crate::plan::{PlanRules, PlanStats, Planned, Planner, ScoreEvent};
 use crate::report::{Bus, Outcomes, Report, Spread};
 use crate::robot::{sim_boards, LocalRobot, SimBoards, MAX_BOARDS};
-use crate::tempo::Tempo;
+use crate::tempo::{Tempo, TimeMap};
 
 /// The longest the performer leaves a line silent: it sends Active Sensing (0xFE) after
 /// 200 ms without a byte, so the robot's watchdog fires only when the sender is really gone.
@@ -112,6 +112,7 @@ impl Setup {
 pub struct Control {
     stop: AtomicBool,
     tempo: Mutex<Option<Tempo>>,
+    map: Mutex<Option<TimeMap>>,
 }
 
 impl Control {
@@ -133,6 +134,16 @@ impl Control {
     /// Play at `tempo` from now on.
     pub fn set_tempo(&self, tempo: Tempo) {
         *self.tempo.lock().unwrap_or_else(|e| e.into_inner()) = Some(tempo);
+    }
+
+    /// The performance's score ↔ wall time map as it stands (`None` before it starts): where
+    /// the score is at any moment, for a follower that pulls the phase toward a beat.
+    pub fn time_map(&self) -> Option<TimeMap> {
+        *self.map.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    fn publish(&self, map: TimeMap) {
+        *self.map.lock().unwrap_or_else(|e| e.into_inner()) = Some(map);
     }
 
     fn tempo_pending(&self) -> bool {
@@ -319,6 +330,9 @@ where
         * 1000;
     let mut planner = Planner::new(source, setup.rules(), ready as i64, setup.tempo);
     let start = planner.wall(0).max(0) as u64;
+    if let Some(c) = control {
+        c.publish(*planner.time_map());
+    }
     let mut ledger = Ledger::new(setup.config.range.keys());
     let mut out = match midi {
         Some(out) => Out::Midi {
@@ -342,6 +356,7 @@ where
         if let Some(c) = control {
             if let Some(t) = c.take_tempo() {
                 planner.set_tempo(clock.now_us() as i64, t);
+                c.publish(*planner.time_map());
             }
         }
         let Some(next) = planner.peek_time() else {
