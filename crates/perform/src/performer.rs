@@ -107,10 +107,13 @@ impl Setup {
     }
 }
 
-/// Steering a performance from another thread: stop it, change its tempo.
+/// Steering a performance from another thread: stop it, pause and resume it, change its
+/// tempo. A performance looks at its control at least every 40 ms (with a live view) and
+/// before each send, so a change takes effect within 40 ms of being asked.
 #[derive(Debug, Default)]
 pub struct Control {
     stop: AtomicBool,
+    pause: AtomicBool,
     tempo: Mutex<Option<Tempo>>,
     map: Mutex<Option<TimeMap>>,
 }
@@ -129,6 +132,25 @@ impl Control {
     /// Whether a stop was asked.
     pub fn stopping(&self) -> bool {
         self.stop.load(Ordering::SeqCst)
+    }
+
+    /// Pause (with a live view: see [`perform`]): every key is released at once (All Notes
+    /// Off and All Sound Off on every channel, so the pedal's notes too), score time stops,
+    /// and the performance waits for [`resume`](Self::resume) or [`stop`](Self::stop). Notes
+    /// already struck are not struck again; the rest play after the pause, each once.
+    pub fn pause(&self) {
+        self.pause.store(true, Ordering::SeqCst);
+    }
+
+    /// Go on after a [`pause`](Self::pause), from the score time where it paused, at the
+    /// tempo it had.
+    pub fn resume(&self) {
+        self.pause.store(false, Ordering::SeqCst);
+    }
+
+    /// Whether a pause is asked.
+    pub fn paused(&self) -> bool {
+        self.pause.load(Ordering::SeqCst)
     }
 
     /// Play at `tempo` from now on.
@@ -169,6 +191,8 @@ pub struct Live {
     pub notes_sent: u64,
     /// The tempo factor.
     pub tempo: f64,
+    /// Paused ([`Control::pause`]).
+    pub paused: bool,
 }
 
 /// What went wrong in a performance.
@@ -401,6 +425,50 @@ where
                     stop = true;
                     break;
                 }
+                if let Some(c) = control.filter(|c| c.paused()) {
+                    // Every key up, score time held, until resumed (or stopped).
+                    let at = clock.now_us().max(last_at);
+                    for ch in 0..16u8 {
+                        for cc in [123, 120] {
+                            deliver(
+                                &mut out,
+                                setup.link,
+                                at,
+                                &[0xB0 | ch, cc, 0],
+                                None,
+                                &mut robot,
+                                &mut ledger,
+                            )?;
+                        }
+                    }
+                    last_at = at;
+                    last_byte = Some(at);
+                    burst = 0;
+                    let song_us = planner.time_map().score(at as i64);
+                    while c.paused() && !c.stopping() {
+                        let now = clock.now_us();
+                        clock.wait_until(now + SHOW_EVERY_US);
+                        // The robot's own timers run on (a strike held for its shortest
+                        // sounding press lets go now).
+                        robot.advance(clock.now_us()).map_err(robot_err)?;
+                        for d in robot.drain_decided() {
+                            ledger.decided(d.t_us, d.event);
+                        }
+                        robot.drain_presses(|p| ledger.press(p));
+                        l(&Live {
+                            song_us,
+                            keys_down: robot.keys_down(),
+                            notes_sent,
+                            tempo: planner.time_map().tempo().get(),
+                            paused: true,
+                        });
+                    }
+                    let now = clock.now_us().max(at);
+                    planner.resume(at as i64, now as i64);
+                    c.publish(*planner.time_map());
+                    replan = true;
+                    break;
+                }
                 if control.is_some_and(Control::tempo_pending) {
                     replan = true;
                     break;
@@ -416,6 +484,7 @@ where
                     keys_down: robot.keys_down(),
                     notes_sent,
                     tempo: planner.time_map().tempo().get(),
+                    paused: false,
                 });
             }
             if stop {

@@ -83,6 +83,14 @@ impl TimeMap {
         }
     }
 
+    /// Paused at wall time `paused`, going on at `now`: the score time at `paused` plays at
+    /// `now`, at the same tempo (nothing of the score is skipped or repeated across the pause).
+    pub fn resume(&mut self, paused: i64, now: i64) {
+        let score = self.score(paused);
+        self.wall = now;
+        self.score = score;
+    }
+
     /// From wall time `now` on, play at `tempo`; the score time at `now` does not move.
     pub fn change(&mut self, now: i64, tempo: Tempo) {
         let score = self.score(now);
