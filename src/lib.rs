@@ -9,6 +9,7 @@
 
 pub mod baton;
 pub mod cli;
+pub mod conduct;
 pub mod decode;
 pub mod error;
 pub mod hex;
@@ -28,5 +29,6 @@ pub fn run(command: cli::Command) -> anyhow::Result<()> {
         cli::Command::Analyze(args) => play::run_analyze(&args),
         cli::Command::Config => robot::print_default(),
         cli::Command::Baton(args) => baton::run(&args),
+        cli::Command::Conduct(args) => conduct::run(&args),
     }
 }
