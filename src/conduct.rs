@@ -14,8 +14,8 @@ use std::time::{Duration, Instant};
 use orch_baton::source::{self, FrameSource};
 use orch_baton::{Baton, Frame};
 use orch_perform::{
-    Action, ConductError, Control, Cue, Follow, Follower, MidiClock, OscCues, ScoreBeats,
-    TapTempo, Tempo, TempoSource, Timed,
+    Action, ConductError, Control, Cue, Follow, Follower, MidiClock, OscCues, ScoreBeats, TapTempo,
+    Tempo, TempoSource, Timed,
 };
 
 use crate::cli::{ConductArgs, FollowMode};
@@ -343,9 +343,8 @@ fn open_source(
             stamp,
         }),
         SourceSpec::MidiClock(ClockIn::File(path)) => Box::new(ClockBytes {
-            reader: std::fs::File::open(path).map_err(|e| {
-                bad_input(format!("--source midi-clock:{}: {e}", path.display()))
-            })?,
+            reader: std::fs::File::open(path)
+                .map_err(|e| bad_input(format!("--source midi-clock:{}: {e}", path.display())))?,
             decoder: MidiClock::new(),
             pending,
             stamp,
@@ -400,15 +399,13 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
         let spec = spec.clone();
         let taps = tap.then_some(tap_rx);
         // Detached: a source blocked on its input ends with the process.
-        std::thread::spawn(move || {
-            match open_source(&spec, &control, stamp, taps) {
-                Ok(source) => {
-                    let _ = opened_tx.send(Ok(()));
-                    follow(source, follower, &control, &status);
-                }
-                Err(e) => {
-                    let _ = opened_tx.send(Err(e));
-                }
+        std::thread::spawn(move || match open_source(&spec, &control, stamp, taps) {
+            Ok(source) => {
+                let _ = opened_tx.send(Ok(()));
+                follow(source, follower, &control, &status);
+            }
+            Err(e) => {
+                let _ = opened_tx.send(Err(e));
             }
         });
         opened
@@ -416,12 +413,7 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
             .map_err(|_| anyhow::anyhow!("the tempo source's thread ended"))??;
     }
     let name = source_name(&spec);
-    let status_line = || {
-        status
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .line(&name)
-    };
+    let status_line = || status.lock().unwrap_or_else(|e| e.into_inner()).line(&name);
     let mut on_key = |c: char| {
         if tap && c != 'q' {
             let _ = tap_tx.send(stamp.now_us());
@@ -487,7 +479,15 @@ mod tests {
             SourceSpec::parse("osc:0.0.0.0:57120"),
             Ok(SourceSpec::Osc("0.0.0.0:57120".parse().unwrap()))
         );
-        for bad in ["", "osc:", "osc:x", "baton:", "midi-clock:", "clock:3", "midi-clock:udp:70000"] {
+        for bad in [
+            "",
+            "osc:",
+            "osc:x",
+            "baton:",
+            "midi-clock:",
+            "clock:3",
+            "midi-clock:udp:70000",
+        ] {
             assert!(SourceSpec::parse(bad).is_err(), "{bad}");
         }
     }

@@ -337,8 +337,7 @@ pub(crate) fn play_live(
                 if crate::view::keys(on_key) {
                     control.stop();
                 }
-                if let Some(mut scene) = scene(&senders, &song, &title, low, total_s, notes_total)
-                {
+                if let Some(mut scene) = scene(&senders, &song, &title, low, total_s, notes_total) {
                     if let Some(c) = &conductor {
                         scene.conductor = Some((c.status)());
                     }

@@ -49,6 +49,13 @@ impl TimeMap {
         }
     }
 
+    /// The anchor: from wall time `.0` (µs) on, score time runs from `.1` at the tempo.
+    /// It moves at each change of tempo (to the wall time the change took effect) and at a
+    /// resume.
+    pub fn anchor(&self) -> (i64, u64) {
+        (self.wall, self.score)
+    }
+
     /// The tempo now.
     pub fn tempo(&self) -> Tempo {
         self.tempo
