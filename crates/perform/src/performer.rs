@@ -376,11 +376,21 @@ where
     let mut burst = 0usize;
     let mut burst_at = 0u64;
 
+    // Notes sent (early) whose time to sound has not come: a tempo change moves that time.
+    let mut sent_ahead: Vec<(u32, i64)> = Vec::new();
     loop {
         if let Some(c) = control {
             if let Some(t) = c.take_tempo() {
-                planner.set_tempo(clock.now_us() as i64, t);
-                c.publish(*planner.time_map());
+                let now = clock.now_us() as i64;
+                let old = *planner.time_map();
+                planner.set_tempo(now, t);
+                let new = *planner.time_map();
+                c.publish(new);
+                sent_ahead.retain(|&(_, at)| at > now);
+                for (id, at) in &mut sent_ahead {
+                    *at = new.wall(old.score(*at));
+                    ledger.rescore(*id, *at);
+                }
             }
         }
         let Some(next) = planner.peek_time() else {
@@ -531,6 +541,9 @@ where
                 if let (Some(id), Some((ch, n, _))) = (note, bytes.note_on()) {
                     ledger.score(id, ch, n, score_at_us);
                     notes_sent += 1;
+                    let now = clock.now_us() as i64;
+                    sent_ahead.retain(|&(_, at)| at > now);
+                    sent_ahead.push((id, score_at_us));
                 }
                 let t = next.max(last_at);
                 deliver(

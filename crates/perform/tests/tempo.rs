@@ -202,3 +202,93 @@ fn a_pause_releases_every_key_and_the_rest_plays_once_after_it() {
     pause_and_resume(Link::Din, true);
     pause_and_resume(Link::Direct, false);
 }
+
+/// A clock that asks for a tempo change in the wait that ends at `at_us` after the score's
+/// start (or later): the performer takes it right after what it sends then.
+struct ChangeAt {
+    inner: VirtualClock,
+    control: Arc<Control>,
+    at_us: u64,
+    tempo: Tempo,
+    done: bool,
+}
+
+impl orch_seq::Clock for ChangeAt {
+    fn now_us(&self) -> u64 {
+        self.inner.now_us()
+    }
+
+    fn wait_until(&mut self, deadline_us: u64) -> u64 {
+        if let Some(m) = self.control.time_map() {
+            let start = m.wall(0).max(0) as u64;
+            if !self.done && deadline_us >= start + self.at_us {
+                self.control.set_tempo(self.tempo);
+                self.done = true;
+            }
+        }
+        self.inner.wait_until(deadline_us)
+    }
+
+    fn lateness(&self) -> orch_seq::Lateness {
+        self.inner.lateness()
+    }
+}
+
+/// A tempo change after a press went out early: it is not taken back (the note strikes
+/// once, when it was going to), and the note the change made late is counted late.
+#[test]
+fn a_change_after_an_early_press_counts_the_note_it_made_late() {
+    // Three quarter notes at 60 BPM: at 0, 1 and 2 s, 100 ms each.
+    let mut trk = vec![0x00, 0xFF, 0x51, 0x03, 0x0F, 0x42, 0x40];
+    for i in 0..3u8 {
+        let delta: &[u8] = if i == 0 { &[0] } else { &[0x83, 0x30] };
+        trk.extend_from_slice(delta);
+        trk.extend_from_slice(&[0x90, 60 + i, 100, 0x30, 0x80, 60 + i, 0]);
+    }
+    trk.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
+    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
+    smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
+    smf.extend_from_slice(&trk);
+    let song = Song::parse(&smf).unwrap();
+    let setup = Setup {
+        config: thesis_config(),
+        sim: orch_sim::SimConfig::thesis(),
+        compensation: true,
+        tempo: Tempo::NORMAL,
+        link: Link::Direct,
+    };
+    let lead = setup.rules().press_lead_us[24 + 1];
+    let control: Arc<Control> = Control::new();
+    // The second note's press goes out `lead` before 1 s; three times as fast from then.
+    let mut clock = ChangeAt {
+        inner: VirtualClock::new(),
+        control: Arc::clone(&control),
+        at_us: 1_000_000 - lead,
+        tempo: Tempo::new(3.0).unwrap(),
+        done: false,
+    };
+    let mut live = |_: &Live| {};
+    let played = perform::<_, MidiRecording>(
+        &setup,
+        song_events(&song),
+        song.notes(),
+        None,
+        &mut clock,
+        Some(&control),
+        Some(&mut live),
+    )
+    .unwrap();
+    assert!(clock.done);
+    let r = played.report(None);
+    assert!(r.adds_up(), "{r:?}");
+    assert_eq!(r.strikes, 3, "every note struck once");
+    assert_eq!(r.outcomes.on_time, 2, "{:?}", played.records);
+    // The second sounds when its press (sent before the change) makes it sound: the faster
+    // tempo wanted it two thirds of the lead sooner.
+    assert_eq!(r.outcomes.late, 1, "{:?}", played.records);
+    let by = match played.records[1].outcome {
+        orch_perform::Outcome::Late { by_us } => i64::from(by_us),
+        o => panic!("{o:?}"),
+    };
+    assert!((by - lead as i64 * 2 / 3).abs() <= 1_000, "{by} {lead}");
+}
