@@ -108,12 +108,14 @@ impl Setup {
 }
 
 /// Steering a performance from another thread: stop it, pause and resume it, change its
-/// tempo. A performance looks at its control at least every 40 ms (with a live view) and
-/// before each send, so a change takes effect within 40 ms of being asked.
+/// tempo. A performance looks at its control at least every 40 ms (with a live view; see
+/// [`poll_every`](Self::poll_every)) and before each send, so a change takes effect within
+/// 40 ms of being asked.
 #[derive(Debug, Default)]
 pub struct Control {
     stop: AtomicBool,
     pause: AtomicBool,
+    poll_us: std::sync::atomic::AtomicU64,
     tempo: Mutex<Option<Tempo>>,
     map: Mutex<Option<TimeMap>>,
 }
@@ -127,6 +129,21 @@ impl Control {
     /// Stop as soon as possible: every key released, the rest of the song stopped.
     pub fn stop(&self) {
         self.stop.store(true, Ordering::SeqCst);
+    }
+
+    /// Look at the control (and call the live view) every `us` µs instead of every 40 ms, from
+    /// 1 ms to 40 ms: a conductor's change then takes effect within that. (Each wake is one
+    /// call of the live view.)
+    pub fn poll_every(&self, us: u64) {
+        self.poll_us
+            .store(us.clamp(1_000, SHOW_EVERY_US), Ordering::SeqCst);
+    }
+
+    fn poll_us(&self) -> u64 {
+        match self.poll_us.load(Ordering::SeqCst) {
+            0 => SHOW_EVERY_US,
+            us => us,
+        }
     }
 
     /// Whether a stop was asked.
@@ -327,7 +344,8 @@ enum Out<'m, M: MidiOut> {
 /// `midi` output the bytes go out there, and the virtual robot is its copy at the far end of
 /// `setup.link`; without, the virtual robot is the robot. `clock` paces the sends (a
 /// `VirtualClock` renders as fast as the machine goes); with `live`, the performer wakes at
-/// least every 40 ms to call it with where it stands and to look at `control`.
+/// least every 40 ms (or as [`Control::poll_every`] says) to call it with where it stands
+/// and to look at `control`.
 pub fn perform<S, M>(
     setup: &Setup,
     source: S,
@@ -376,6 +394,7 @@ where
     let mut burst = 0usize;
     let mut burst_at = 0u64;
 
+    let every = control.map_or(SHOW_EVERY_US, Control::poll_us);
     // Notes sent (early) whose time to sound has not come: a tempo change moves that time.
     let mut sent_ahead: Vec<(u32, i64)> = Vec::new();
     loop {
@@ -426,7 +445,8 @@ where
             }
         }
         if let Some(l) = live.as_deref_mut() {
-            // Wake at least every 40 ms to show where the song is and to look at `control`;
+            // Wake at least every 40 ms (or the control's poll) to show where the song is and to
+            // look at `control`;
             // the last stretch before a send is one precise wait, with nothing else in it.
             let mut stop = false;
             let mut replan = false;
@@ -457,7 +477,7 @@ where
                     let song_us = planner.time_map().score(at as i64);
                     while c.paused() && !c.stopping() {
                         let now = clock.now_us();
-                        clock.wait_until(now + SHOW_EVERY_US);
+                        clock.wait_until(now + every);
                         // The robot's own timers run on (a strike held for its shortest
                         // sounding press lets go now).
                         robot.advance(clock.now_us()).map_err(robot_err)?;
@@ -484,11 +504,11 @@ where
                     break;
                 }
                 let now = clock.now_us();
-                if now + SHOW_EVERY_US >= due.0 {
+                if now + every >= due.0 {
                     clock.wait_until(due.0);
                     break;
                 }
-                clock.wait_until(now + SHOW_EVERY_US);
+                clock.wait_until(now + every);
                 l(&Live {
                     song_us: planner.time_map().score(clock.now_us() as i64),
                     keys_down: robot.keys_down(),
