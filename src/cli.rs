@@ -30,6 +30,9 @@ pub enum Command {
     /// Play live MIDI on the robot: bytes in (serial, raw MIDI, UDP, stdin), the interpreter
     /// and its guard, finger boards out (the virtual robot or I2C), the stream passed on.
     Run(RunArgs),
+    /// Play a Standard MIDI File live, following a conductor: a baton video, tap tempo,
+    /// MIDI clock or OSC.
+    Conduct(ConductArgs),
 }
 
 /// Where the bytes come from and how they are written.
@@ -162,4 +165,44 @@ pub struct RunArgs {
     /// for one at any time); what the outputs do.
     #[arg(long)]
     pub verbose: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct ConductArgs {
+    /// The Standard MIDI File.
+    pub file: PathBuf,
+    /// The conductor: baton:VIDEO (a baton with a red LED, the video's start at the score's),
+    /// tap (the space bar in the live view), midi-clock:IN (raw MIDI bytes with clock 0xF8,
+    /// Start, Stop, Continue: IN is `-` for standard input, a file, FIFO or device, or
+    /// udp:PORT), or osc:PORT (`/orch/tempo f`, `/orch/beat`). UDP listens on 127.0.0.1
+    /// unless HOST:PORT is given.
+    #[arg(long, value_name = "SOURCE")]
+    pub source: String,
+    /// Follow the conductor's rate only (immediate), or also pull the phase toward each beat.
+    #[arg(long, value_enum, default_value_t = FollowMode::Phase)]
+    pub follow: FollowMode,
+    /// The robot's configuration (see `orch config`); the thesis's robot if not given.
+    #[arg(long, value_name = "FILE")]
+    pub robot: Option<PathBuf>,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Send every message at its score time instead of early by the key's mechanical delay.
+    #[arg(long)]
+    pub no_compensation: bool,
+    /// No live terminal view (it is off anyway when the output is not a terminal).
+    #[arg(long)]
+    pub no_view: bool,
+    /// Where to play, as `orch play --out`.
+    #[arg(long = "out", value_name = "OUT")]
+    pub outs: Vec<String>,
+    /// Log what the outputs and the source do on standard error.
+    #[arg(long)]
+    pub verbose: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum FollowMode {
+    Immediate,
+    Phase,
 }

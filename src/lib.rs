@@ -9,6 +9,7 @@
 
 pub mod baton;
 pub mod cli;
+pub mod conduct;
 pub mod decode;
 pub mod error;
 pub mod hex;
@@ -30,5 +31,6 @@ pub fn run(command: cli::Command) -> anyhow::Result<()> {
         cli::Command::Config => robot::print_default(),
         cli::Command::Baton(args) => baton::run(&args),
         cli::Command::Run(args) => run::run(&args),
+        cli::Command::Conduct(args) => conduct::run(&args),
     }
 }

@@ -110,20 +110,7 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
             )));
         }
     }
-    let mut lanes = Vec::new();
-    for spec in specs {
-        let setup = Setup {
-            link: if spec.is_din() {
-                Link::Din
-            } else {
-                Link::Direct
-            },
-            ..setup.clone()
-        };
-        let out = Output::open(&spec.target, &setup.config)
-            .map_err(|e| bad_input(format!("--out {}: {e}", spec.text)))?;
-        lanes.push(Lane { spec, setup, out });
-    }
+    let lanes = open_lanes(specs, &setup)?;
     let played: Vec<(OutSpec, Played, Option<OutStats>)> = if args.fast {
         lanes
             .into_iter()
@@ -142,15 +129,61 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
             })
             .collect::<anyhow::Result<_>>()?
     } else {
-        play_live(song, lanes, args)?
+        let live = LiveOptions {
+            view: !args.no_view,
+            file: &args.file,
+            conductor: None,
+        };
+        play_live(song, lanes, live)?
     };
     // The comparison without compensation is `orch analyze`'s: a play renders once.
     print_reports(&played, args.json, &args.file, !args.outs.is_empty())
 }
 
+/// Opens every output: one robot (a lane) each.
+pub(crate) fn open_lanes(specs: Vec<OutSpec>, setup: &Setup) -> anyhow::Result<Vec<Lane>> {
+    let mut lanes = Vec::new();
+    for spec in specs {
+        let setup = Setup {
+            link: if spec.is_din() {
+                Link::Din
+            } else {
+                Link::Direct
+            },
+            ..setup.clone()
+        };
+        let out = Output::open(&spec.target, &setup.config)
+            .map_err(|e| bad_input(format!("--out {}: {e}", spec.text)))?;
+        lanes.push(Lane { spec, setup, out });
+    }
+    Ok(lanes)
+}
+
+/// How a live performance is shown and steered.
+pub(crate) struct LiveOptions<'a> {
+    /// The live view, if standard output is a terminal.
+    pub view: bool,
+    /// The file played (its name is the view's title).
+    pub file: &'a Path,
+    /// A conductor (`orch conduct`), steering the performance through its own control.
+    pub conductor: Option<Conductor<'a>>,
+}
+
+/// A conductor steering a live performance.
+pub(crate) struct Conductor<'a> {
+    /// The control the conductor steers; the performance's.
+    pub control: Arc<Control>,
+    /// The performer's clock's zero (the conductor's cues are timed on it).
+    pub origin: std::time::Instant,
+    /// The line the view shows under its head: the conductor's beats and tempo.
+    pub status: &'a dyn Fn() -> String,
+    /// A key pressed in the view (other than q and Esc).
+    pub on_key: &'a mut dyn FnMut(char),
+}
+
 /// Logging through `tracing` on standard error: warnings (a device or a board lost, and back),
 /// everything the outputs do with `--verbose`.
-fn init_logging(verbose: bool) {
+pub(crate) fn init_logging(verbose: bool) {
     let level = if verbose {
         tracing::Level::DEBUG
     } else {
@@ -164,7 +197,7 @@ fn init_logging(verbose: bool) {
 }
 
 /// The `--out` options; the virtual robot alone when there is none.
-fn out_specs(outs: &[String]) -> anyhow::Result<Vec<OutSpec>> {
+pub(crate) fn out_specs(outs: &[String]) -> anyhow::Result<Vec<OutSpec>> {
     if outs.is_empty() {
         return Ok(vec![OutSpec::parse("sim").expect("sim is an output")]);
     }
@@ -175,7 +208,7 @@ fn out_specs(outs: &[String]) -> anyhow::Result<Vec<OutSpec>> {
 
 /// One robot of a performance: where it plays, how, and its opened output (none for the
 /// virtual robot alone).
-struct Lane {
+pub(crate) struct Lane {
     spec: OutSpec,
     setup: Setup,
     out: Option<Output>,
@@ -233,20 +266,26 @@ type Sender = (
 /// Plays in real time: one sender thread per robot (real-time priority where allowed), all on
 /// one clock, the view on this thread. `q`, SIGINT, SIGTERM and SIGHUP stop every robot with
 /// every key released, and the reports still come; so does a panic, on any thread.
-fn play_live(
+pub(crate) fn play_live(
     song: Song,
     lanes: Vec<Lane>,
-    args: &PlayArgs,
+    options: LiveOptions<'_>,
 ) -> anyhow::Result<Vec<(OutSpec, Played, Option<OutStats>)>> {
+    let LiveOptions {
+        view: show,
+        file,
+        mut conductor,
+    } = options;
     let signalled = stop_on_signals()?;
-    let show = !args.no_view && std::io::stdout().is_terminal();
-    let title = args
-        .file
+    let show = show && std::io::stdout().is_terminal();
+    let title = file
         .file_name()
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-    let control = Control::new();
+    let (control, origin) = match &conductor {
+        Some(c) => (Arc::clone(&c.control), c.origin),
+        None => (Control::new(), std::time::Instant::now()),
+    };
     let song = Arc::new(song);
-    let origin = std::time::Instant::now();
     let (low, tempo) = match lanes.first() {
         Some(l) => (l.setup.config.range.low().get(), l.setup.tempo),
         None => return Ok(Vec::new()),
@@ -291,10 +330,17 @@ fn play_live(
                 control.stop();
             }
             if let Some(v) = view.as_mut() {
-                if crate::view::quit_requested() {
+                let on_key: Option<&mut dyn FnMut(char)> = match conductor.as_mut() {
+                    Some(c) => Some(&mut *c.on_key),
+                    None => None,
+                };
+                if crate::view::keys(on_key) {
                     control.stop();
                 }
-                if let Some(scene) = scene(&senders, &song, &title, low, total_s, notes_total) {
+                if let Some(mut scene) = scene(&senders, &song, &title, low, total_s, notes_total) {
+                    if let Some(c) = &conductor {
+                        scene.conductor = Some((c.status)());
+                    }
                     if let Err(e) = v.draw(&scene) {
                         view_error = Some(e);
                         control.stop();
@@ -388,6 +434,7 @@ fn scene(
         total_s,
         notes_sent: sent,
         notes,
+        conductor: None,
     })
 }
 
@@ -467,7 +514,7 @@ struct RobotReport<'a> {
     report: Report,
 }
 
-fn print_reports(
+pub(crate) fn print_reports(
     played: &[(OutSpec, Played, Option<OutStats>)],
     json: bool,
     file: &Path,

@@ -24,6 +24,8 @@ pub struct Scene {
     pub total_s: f64,
     pub notes_sent: u64,
     pub notes: u64,
+    /// `orch conduct`: the conductor's beats and tempo, a line under the head.
+    pub conductor: Option<String>,
 }
 
 const NAMES: [&str; 12] = [
@@ -65,13 +67,24 @@ impl View {
 /// Whether the person at the terminal asked to stop (q, Esc or Ctrl-C; the view's raw mode
 /// turns Ctrl-C into a key press).
 pub fn quit_requested() -> bool {
-    use ratatui::crossterm::event::{self, Event, KeyCode, KeyModifiers};
+    keys(None)
+}
+
+/// Reads the keys pressed: whether one asks to stop (as [`quit_requested`]); every other
+/// character key goes to `other` (the tap key of `orch conduct`).
+pub fn keys(mut other: Option<&mut dyn FnMut(char)>) -> bool {
+    use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
     while event::poll(std::time::Duration::ZERO).unwrap_or(false) {
         if let Ok(Event::Key(k)) = event::read() {
             let ctrl_c =
                 k.code == KeyCode::Char('c') && k.modifiers.contains(KeyModifiers::CONTROL);
             if ctrl_c || matches!(k.code, KeyCode::Char('q') | KeyCode::Esc) {
                 return true;
+            }
+            if let (KeyCode::Char(c), Some(f), KeyEventKind::Press) =
+                (k.code, other.as_deref_mut(), k.kind)
+            {
+                f(c);
             }
         }
     }
@@ -85,8 +98,9 @@ impl Drop for View {
 }
 
 fn render(f: &mut Frame, s: &Scene) {
-    let [head, keys, down, gauge] = Layout::vertical([
+    let [head, conductor, keys, down, gauge] = Layout::vertical([
         Constraint::Length(1),
+        Constraint::Length(u16::from(s.conductor.is_some())),
         Constraint::Length(5),
         Constraint::Length(1),
         Constraint::Length(1),
@@ -100,6 +114,9 @@ fn render(f: &mut Frame, s: &Scene) {
         )),
     ]);
     f.render_widget(Paragraph::new(head_line), head);
+    if let Some(c) = &s.conductor {
+        f.render_widget(Paragraph::new(c.as_str()), conductor);
+    }
 
     // One cell a key; pressed keys lit. Octave labels above.
     let mut labels = String::new();
@@ -178,6 +195,7 @@ mod tests {
             total_s: 122.0,
             notes_sent: 5,
             notes: 10,
+            conductor: Some("conductor: beat 7, 96.0 BPM".into()),
         };
         t.draw(|f| render(f, &scene)).unwrap();
         let text: String = t
@@ -188,6 +206,7 @@ mod tests {
             .map(|c| c.symbol())
             .collect();
         assert!(text.contains("bar 3 beat 2"), "{text}");
+        assert!(text.contains("conductor: beat 7, 96.0 BPM"), "{text}");
         assert!(text.contains("down: C4 E4"), "{text}");
         assert!(text.contains("1:01 / 2:02"), "{text}");
         assert_eq!(note_name(36), "C2");

@@ -143,6 +143,13 @@ impl Ledger {
         e.score_at_us = score_at_us;
     }
 
+    /// A tempo change after note `id` was sent (early, by its press lead) moved the time it
+    /// should sound to `score_at_us`. The press already sent is not taken back; the note is
+    /// judged against its new time, so a note the change made late is counted late.
+    pub fn rescore(&mut self, id: NoteId, score_at_us: i64) {
+        self.entry(id).score_at_us = score_at_us;
+    }
+
     /// Its Note-On was delivered to the robot (its first event comes when the robot decodes it).
     pub fn delivered(&mut self, id: NoteId) {
         self.in_flight.push_back(id);

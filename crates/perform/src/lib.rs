@@ -17,6 +17,9 @@
 //! - **The account** ([`Ledger`], [`Outcome`], [`Report`]): the interpreter says whether
 //!   each note struck, joined or was dropped and why; the virtual robot says when each strike
 //!   sounded. Every note gets exactly one outcome; they add up.
+//! - **A conductor** ([`conduct`]): tempo sources behind one trait ([`TempoSource`]: MIDI
+//!   clock, OSC, tap tempo, the baton tracker through the front end) and the [`Follower`]
+//!   that turns their beats into tempo changes, following the rate or also the phase.
 //! - **Real time** ([`realtime`]): the sender on its own thread at real-time priority where
 //!   the OS allows it, with a precise sleep, lateness measured per message sent.
 //!
@@ -52,6 +55,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod conduct;
 pub mod ledger;
 pub mod link;
 pub mod performer;
@@ -61,6 +65,10 @@ pub mod report;
 pub mod robot;
 pub mod tempo;
 
+pub use conduct::{
+    Action, ConductError, Cue, Follow, Follower, MidiClock, OscCues, ScoreBeats, TapTempo,
+    TempoSource, Timed,
+};
 pub use ledger::{Ledger, NoteRecord, Outcome, ON_TIME_US};
 pub use link::{DinWire, Link, MidiOut, MidiRecording, RunningStatus};
 pub use performer::{perform, Control, Live, PerformError, Played, Setup, KEEP_ALIVE_US};

@@ -12,7 +12,7 @@ use crate::link::{DinWire, Link, MidiOut, RunningStatus};
 use crate::plan::{PlanRules, PlanStats, Planned, Planner, ScoreEvent};
 use crate::report::{Bus, Outcomes, Report, Spread};
 use crate::robot::{sim_boards, LocalRobot, SimBoards, MAX_BOARDS};
-use crate::tempo::Tempo;
+use crate::tempo::{Tempo, TimeMap};
 
 /// The longest the performer leaves a line silent: it sends Active Sensing (0xFE) after
 /// 200 ms without a byte, so the robot's watchdog fires only when the sender is really gone.
@@ -107,11 +107,17 @@ impl Setup {
     }
 }
 
-/// Steering a performance from another thread: stop it, change its tempo.
+/// Steering a performance from another thread: stop it, pause and resume it, change its
+/// tempo. A performance looks at its control at least every 40 ms (with a live view; see
+/// [`poll_every`](Self::poll_every)) and before each send, so a change takes effect within
+/// 40 ms of being asked.
 #[derive(Debug, Default)]
 pub struct Control {
     stop: AtomicBool,
+    pause: AtomicBool,
+    poll_us: std::sync::atomic::AtomicU64,
     tempo: Mutex<Option<Tempo>>,
+    map: Mutex<Option<TimeMap>>,
 }
 
 impl Control {
@@ -125,14 +131,58 @@ impl Control {
         self.stop.store(true, Ordering::SeqCst);
     }
 
+    /// Look at the control (and call the live view) every `us` µs instead of every 40 ms, from
+    /// 1 ms to 40 ms: a conductor's change then takes effect within that. (Each wake is one
+    /// call of the live view.)
+    pub fn poll_every(&self, us: u64) {
+        self.poll_us
+            .store(us.clamp(1_000, SHOW_EVERY_US), Ordering::SeqCst);
+    }
+
+    fn poll_us(&self) -> u64 {
+        match self.poll_us.load(Ordering::SeqCst) {
+            0 => SHOW_EVERY_US,
+            us => us,
+        }
+    }
+
     /// Whether a stop was asked.
     pub fn stopping(&self) -> bool {
         self.stop.load(Ordering::SeqCst)
     }
 
+    /// Pause (with a live view: see [`perform`]): every key is released at once (All Notes
+    /// Off and All Sound Off on every channel, so the pedal's notes too), score time stops,
+    /// and the performance waits for [`resume`](Self::resume) or [`stop`](Self::stop). Notes
+    /// already struck are not struck again; the rest play after the pause, each once.
+    pub fn pause(&self) {
+        self.pause.store(true, Ordering::SeqCst);
+    }
+
+    /// Go on after a [`pause`](Self::pause), from the score time where it paused, at the
+    /// tempo it had.
+    pub fn resume(&self) {
+        self.pause.store(false, Ordering::SeqCst);
+    }
+
+    /// Whether a pause is asked.
+    pub fn paused(&self) -> bool {
+        self.pause.load(Ordering::SeqCst)
+    }
+
     /// Play at `tempo` from now on.
     pub fn set_tempo(&self, tempo: Tempo) {
         *self.tempo.lock().unwrap_or_else(|e| e.into_inner()) = Some(tempo);
+    }
+
+    /// The performance's score ↔ wall time map as it stands (`None` before it starts): where
+    /// the score is at any moment, for a follower that pulls the phase toward a beat.
+    pub fn time_map(&self) -> Option<TimeMap> {
+        *self.map.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    fn publish(&self, map: TimeMap) {
+        *self.map.lock().unwrap_or_else(|e| e.into_inner()) = Some(map);
     }
 
     fn tempo_pending(&self) -> bool {
@@ -158,6 +208,8 @@ pub struct Live {
     pub notes_sent: u64,
     /// The tempo factor.
     pub tempo: f64,
+    /// Paused ([`Control::pause`]).
+    pub paused: bool,
 }
 
 /// What went wrong in a performance.
@@ -292,7 +344,8 @@ enum Out<'m, M: MidiOut> {
 /// `midi` output the bytes go out there, and the virtual robot is its copy at the far end of
 /// `setup.link`; without, the virtual robot is the robot. `clock` paces the sends (a
 /// `VirtualClock` renders as fast as the machine goes); with `live`, the performer wakes at
-/// least every 40 ms to call it with where it stands and to look at `control`.
+/// least every 40 ms (or as [`Control::poll_every`] says) to call it with where it stands
+/// and to look at `control`.
 pub fn perform<S, M>(
     setup: &Setup,
     source: S,
@@ -319,6 +372,9 @@ where
         * 1000;
     let mut planner = Planner::new(source, setup.rules(), ready as i64, setup.tempo);
     let start = planner.wall(0).max(0) as u64;
+    if let Some(c) = control {
+        c.publish(*planner.time_map());
+    }
     let mut ledger = Ledger::new(setup.config.range.keys());
     let mut out = match midi {
         Some(out) => Out::Midi {
@@ -338,10 +394,22 @@ where
     let mut burst = 0usize;
     let mut burst_at = 0u64;
 
+    let every = control.map_or(SHOW_EVERY_US, Control::poll_us);
+    // Notes sent (early) whose time to sound has not come: a tempo change moves that time.
+    let mut sent_ahead: Vec<(u32, i64)> = Vec::new();
     loop {
         if let Some(c) = control {
             if let Some(t) = c.take_tempo() {
-                planner.set_tempo(clock.now_us() as i64, t);
+                let now = clock.now_us() as i64;
+                let old = *planner.time_map();
+                planner.set_tempo(now, t);
+                let new = *planner.time_map();
+                c.publish(new);
+                sent_ahead.retain(|&(_, at)| at > now);
+                for (id, at) in &mut sent_ahead {
+                    *at = new.wall(old.score(*at));
+                    ledger.rescore(*id, *at);
+                }
             }
         }
         let Some(next) = planner.peek_time() else {
@@ -377,7 +445,8 @@ where
             }
         }
         if let Some(l) = live.as_deref_mut() {
-            // Wake at least every 40 ms to show where the song is and to look at `control`;
+            // Wake at least every 40 ms (or the control's poll) to show where the song is and to
+            // look at `control`;
             // the last stretch before a send is one precise wait, with nothing else in it.
             let mut stop = false;
             let mut replan = false;
@@ -386,21 +455,66 @@ where
                     stop = true;
                     break;
                 }
+                if let Some(c) = control.filter(|c| c.paused()) {
+                    // Every key up, score time held, until resumed (or stopped).
+                    let at = clock.now_us().max(last_at);
+                    for ch in 0..16u8 {
+                        for cc in [123, 120] {
+                            deliver(
+                                &mut out,
+                                setup.link,
+                                at,
+                                &[0xB0 | ch, cc, 0],
+                                None,
+                                &mut robot,
+                                &mut ledger,
+                            )?;
+                        }
+                    }
+                    last_at = at;
+                    last_byte = Some(at);
+                    burst = 0;
+                    let song_us = planner.time_map().score(at as i64);
+                    while c.paused() && !c.stopping() {
+                        let now = clock.now_us();
+                        clock.wait_until(now + every);
+                        // The robot's own timers run on (a strike held for its shortest
+                        // sounding press lets go now).
+                        robot.advance(clock.now_us()).map_err(robot_err)?;
+                        for d in robot.drain_decided() {
+                            ledger.decided(d.t_us, d.event);
+                        }
+                        robot.drain_presses(|p| ledger.press(p));
+                        l(&Live {
+                            song_us,
+                            keys_down: robot.keys_down(),
+                            notes_sent,
+                            tempo: planner.time_map().tempo().get(),
+                            paused: true,
+                        });
+                    }
+                    let now = clock.now_us().max(at);
+                    planner.resume(at as i64, now as i64);
+                    c.publish(*planner.time_map());
+                    replan = true;
+                    break;
+                }
                 if control.is_some_and(Control::tempo_pending) {
                     replan = true;
                     break;
                 }
                 let now = clock.now_us();
-                if now + SHOW_EVERY_US >= due.0 {
+                if now + every >= due.0 {
                     clock.wait_until(due.0);
                     break;
                 }
-                clock.wait_until(now + SHOW_EVERY_US);
+                clock.wait_until(now + every);
                 l(&Live {
                     song_us: planner.time_map().score(clock.now_us() as i64),
                     keys_down: robot.keys_down(),
                     notes_sent,
                     tempo: planner.time_map().tempo().get(),
+                    paused: false,
                 });
             }
             if stop {
@@ -447,6 +561,9 @@ where
                 if let (Some(id), Some((ch, n, _))) = (note, bytes.note_on()) {
                     ledger.score(id, ch, n, score_at_us);
                     notes_sent += 1;
+                    let now = clock.now_us() as i64;
+                    sent_ahead.retain(|&(_, at)| at > now);
+                    sent_ahead.push((id, score_at_us));
                 }
                 let t = next.max(last_at);
                 deliver(

@@ -287,6 +287,20 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
     pub fn set_tempo(&mut self, now_us: i64, tempo: Tempo) {
         let old = self.map;
         self.map.change(now_us, tempo);
+        self.remap(old, now_us, now_us);
+    }
+
+    /// Paused at wall time `paused_us` (nothing sent since), going on at `now_us`: everything
+    /// planned from `paused_us` on moves later by the pause, at the same tempo.
+    pub fn resume(&mut self, paused_us: i64, now_us: i64) {
+        let old = self.map;
+        self.map.resume(paused_us, now_us);
+        self.remap(old, paused_us, now_us);
+    }
+
+    /// The queue and the key models after the map changed from `old`: times from `from_us`
+    /// on follow the map, sends never before `now_us`.
+    fn remap(&mut self, old: TimeMap, from_us: i64, now_us: i64) {
         let moved: Vec<(QueueKey, Planned)> = std::mem::take(&mut self.queue).into_iter().collect();
         let shift = |t: i64, score_at: i64| -> i64 {
             let score = old.score(score_at);
@@ -321,7 +335,7 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         // The movable handles follow their sends; bounds and model times follow the map.
         let map = self.map;
         let remap = |t: i64| {
-            if t < now_us {
+            if t < from_us {
                 t
             } else {
                 map.wall(old.score(t))

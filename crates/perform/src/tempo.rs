@@ -49,6 +49,13 @@ impl TimeMap {
         }
     }
 
+    /// The anchor: from wall time `.0` (µs) on, score time runs from `.1` at the tempo.
+    /// It moves at each change of tempo (to the wall time the change took effect) and at a
+    /// resume.
+    pub fn anchor(&self) -> (i64, u64) {
+        (self.wall, self.score)
+    }
+
     /// The tempo now.
     pub fn tempo(&self) -> Tempo {
         self.tempo
@@ -81,6 +88,14 @@ impl TimeMap {
         } else {
             s.round() as u64
         }
+    }
+
+    /// Paused at wall time `paused`, going on at `now`: the score time at `paused` plays at
+    /// `now`, at the same tempo (nothing of the score is skipped or repeated across the pause).
+    pub fn resume(&mut self, paused: i64, now: i64) {
+        let score = self.score(paused);
+        self.wall = now;
+        self.score = score;
     }
 
     /// From wall time `now` on, play at `tempo`; the score time at `now` does not move.

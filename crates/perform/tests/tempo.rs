@@ -55,23 +55,7 @@ fn a_tempo_change_mid_piece_plays_every_note_once_in_order() {
     assert_eq!(r.unmatched, 0);
     assert_eq!(r.outcomes.dropped.stopped, 0);
     // Every Note-On of the score went out once, in the score's order.
-    let sent: Vec<u8> = out
-        .sent
-        .iter()
-        .scan(0u8, |status, (_, b)| {
-            let (st, data) = if b[0] >= 0x80 {
-                (b[0], &b[1..])
-            } else {
-                (*status, &b[..])
-            };
-            if b[0] < 0xF8 {
-                *status = st;
-            }
-            Some((st, data.to_vec()))
-        })
-        .filter(|(st, d)| st & 0xF0 == 0x90 && d.len() == 2 && d[1] > 0)
-        .map(|(_, d)| d[0])
-        .collect();
+    let sent = note_ons(&out);
     let score: Vec<u8> = song
         .events()
         .iter()
@@ -97,4 +81,214 @@ fn a_tempo_change_mid_piece_plays_every_note_once_in_order() {
         let b = score.iter().filter(|&&n| n == key).count();
         assert_eq!(a.len(), b, "key {key}");
     }
+}
+
+/// The note numbers of the Note-Ons sent, in order, with their send times.
+fn note_ons_at(out: &MidiRecording) -> Vec<(u64, u8)> {
+    out.sent
+        .iter()
+        .scan(0u8, |status, (t, b)| {
+            let (st, data) = if b[0] >= 0x80 {
+                (b[0], &b[1..])
+            } else {
+                (*status, &b[..])
+            };
+            if b[0] < 0xF8 {
+                *status = st;
+            }
+            Some((*t, st, data.to_vec()))
+        })
+        .filter(|(_, st, d)| st & 0xF0 == 0x90 && d.len() == 2 && d[1] > 0)
+        .map(|(t, _, d)| (t, d[0]))
+        .collect()
+}
+
+fn note_ons(out: &MidiRecording) -> Vec<u8> {
+    note_ons_at(out).into_iter().map(|(_, n)| n).collect()
+}
+
+/// Plays the invention over `link` (to a MIDI recording, or on the virtual robot itself),
+/// pausing for a second at 5 s of score time: every key is up through the pause, score time
+/// holds, and every note still goes out once, in order.
+fn pause_and_resume(link: Link, midi: bool) {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/midi");
+    let song = Song::parse(&std::fs::read(dir.join("bach-invention-01.mid")).unwrap()).unwrap();
+    let setup = Setup {
+        config: thesis_config(),
+        sim: orch_sim::SimConfig::thesis(),
+        compensation: true,
+        tempo: Tempo::NORMAL,
+        link,
+    };
+    let control: Arc<Control> = Control::new();
+    let mut paused_views = 0;
+    let mut asked = false;
+    let mut at_pause = None;
+    let mut last_song_us = 0u64;
+    let mut after = Vec::new();
+    let mut live = |l: &Live| {
+        assert!(l.song_us + 1 >= last_song_us, "score time went back");
+        last_song_us = l.song_us;
+        if l.paused {
+            let held = *at_pause.get_or_insert(l.song_us);
+            assert_eq!(l.song_us, held, "score time moved in the pause");
+            paused_views += 1;
+            // After the first wake every key is up (a strike may first be held its shortest
+            // sounding press).
+            if paused_views > 1 {
+                assert!(l.keys_down.iter().all(|&d| !d), "a key down in the pause");
+            }
+            if paused_views == 25 {
+                control.resume();
+            }
+        } else if !asked && l.song_us > 5_000_000 {
+            assert!(l.keys_down.iter().any(|&d| d), "the test wants keys down");
+            control.pause();
+            asked = true;
+        } else if at_pause.is_some() {
+            after.push(l.song_us);
+        }
+    };
+    let mut out = MidiRecording::default();
+    let played = perform(
+        &setup,
+        song_events(&song),
+        song.notes(),
+        midi.then_some(&mut out),
+        &mut VirtualClock::new(),
+        Some(&control),
+        Some(&mut live),
+    )
+    .unwrap();
+    assert_eq!(paused_views, 25);
+    let held = at_pause.unwrap();
+    // It went on from where it paused: the first view after comes within two wakes (80 ms)
+    // of score time, not the second of the pause.
+    assert!(
+        after[0] >= held && after[0] <= held + 81_000,
+        "{held} {:?}",
+        &after[..3]
+    );
+    let r = played.report(None);
+    assert!(r.adds_up(), "{r:?}");
+    assert_eq!(r.outcomes.dropped.stopped, 0);
+    if midi {
+        // All Notes Off on every channel at the pause, then no Note-On for the second it lasts.
+        let offs: Vec<u64> = out
+            .sent
+            .iter()
+            .filter(|(_, b)| b.ends_with(&[123, 0]))
+            .map(|(t, _)| *t)
+            .collect();
+        // 16 at the pause and 16 at the end.
+        assert_eq!(offs.len(), 32, "{offs:?}");
+        let paused_at = offs[0];
+        let ons = note_ons_at(&out);
+        let next = ons.iter().find(|(t, _)| *t >= paused_at).unwrap().0;
+        assert!(next - paused_at >= 960_000, "{paused_at} {next}");
+        let score: Vec<u8> = song
+            .events()
+            .iter()
+            .filter_map(|e| e.bytes.note_on().map(|(_, n, _)| n))
+            .collect();
+        assert_eq!(note_ons(&out), score);
+    } else {
+        assert_eq!(r.strikes + r.outcomes.joined + r.outcomes.unison, r.notes);
+    }
+}
+
+#[test]
+fn a_pause_releases_every_key_and_the_rest_plays_once_after_it() {
+    pause_and_resume(Link::Din, true);
+    pause_and_resume(Link::Direct, false);
+}
+
+/// A clock that asks for a tempo change in the wait that ends at `at_us` after the score's
+/// start (or later): the performer takes it right after what it sends then.
+struct ChangeAt {
+    inner: VirtualClock,
+    control: Arc<Control>,
+    at_us: u64,
+    tempo: Tempo,
+    done: bool,
+}
+
+impl orch_seq::Clock for ChangeAt {
+    fn now_us(&self) -> u64 {
+        self.inner.now_us()
+    }
+
+    fn wait_until(&mut self, deadline_us: u64) -> u64 {
+        if let Some(m) = self.control.time_map() {
+            let start = m.wall(0).max(0) as u64;
+            if !self.done && deadline_us >= start + self.at_us {
+                self.control.set_tempo(self.tempo);
+                self.done = true;
+            }
+        }
+        self.inner.wait_until(deadline_us)
+    }
+
+    fn lateness(&self) -> orch_seq::Lateness {
+        self.inner.lateness()
+    }
+}
+
+/// A tempo change after a press went out early: it is not taken back (the note strikes
+/// once, when it was going to), and the note the change made late is counted late.
+#[test]
+fn a_change_after_an_early_press_counts_the_note_it_made_late() {
+    // Three quarter notes at 60 BPM: at 0, 1 and 2 s, 100 ms each.
+    let mut trk = vec![0x00, 0xFF, 0x51, 0x03, 0x0F, 0x42, 0x40];
+    for i in 0..3u8 {
+        let delta: &[u8] = if i == 0 { &[0] } else { &[0x83, 0x30] };
+        trk.extend_from_slice(delta);
+        trk.extend_from_slice(&[0x90, 60 + i, 100, 0x30, 0x80, 60 + i, 0]);
+    }
+    trk.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
+    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
+    smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
+    smf.extend_from_slice(&trk);
+    let song = Song::parse(&smf).unwrap();
+    let setup = Setup {
+        config: thesis_config(),
+        sim: orch_sim::SimConfig::thesis(),
+        compensation: true,
+        tempo: Tempo::NORMAL,
+        link: Link::Direct,
+    };
+    let lead = setup.rules().press_lead_us[24 + 1];
+    let control: Arc<Control> = Control::new();
+    // The second note's press goes out `lead` before 1 s; three times as fast from then.
+    let mut clock = ChangeAt {
+        inner: VirtualClock::new(),
+        control: Arc::clone(&control),
+        at_us: 1_000_000 - lead,
+        tempo: Tempo::new(3.0).unwrap(),
+        done: false,
+    };
+    let mut live = |_: &Live| {};
+    let played = perform::<_, MidiRecording>(
+        &setup,
+        song_events(&song),
+        song.notes(),
+        None,
+        &mut clock,
+        Some(&control),
+        Some(&mut live),
+    )
+    .unwrap();
+    assert!(clock.done);
+    let r = played.report(None);
+    assert!(r.adds_up(), "{r:?}");
+    assert_eq!(r.strikes, 3, "every note struck once");
+    assert_eq!(r.outcomes.on_time, 2, "{:?}", played.records);
+    // The second sounds when its press (sent before the change) makes it sound: the faster
+    // tempo wanted it two thirds of the lead sooner.
+    assert_eq!(r.outcomes.late, 1, "{:?}", played.records);
+    let by = match played.records[1].outcome {
+        orch_perform::Outcome::Late { by_us } => i64::from(by_us),
+        o => panic!("{o:?}"),
+    };
+    assert!((by - lead as i64 * 2 / 3).abs() <= 1_000, "{by} {lead}");
 }

@@ -1,0 +1,719 @@
+//! Following a conductor: tempo sources behind one trait, and the follower that turns what
+//! they say into tempo changes of a performance.
+//!
+//! A **tempo source** ([`TempoSource`]) gives [`Cue`]s with their times on the performer's
+//! clock: a tempo, a beat, or the transport (start, stop, continue, song position). The
+//! sources' decoders here are pure (bytes and times in, cues out): incoming MIDI clock
+//! ([`MidiClock`]), OSC ([`parse_osc`]), tap tempo ([`TapTempo`]); the I/O around them (a
+//! file, standard input, a UDP port, a key, a video through `orch-baton`) is the front end's.
+//!
+//! The **follower** ([`Follower`]) turns each cue into a tempo factor for
+//! [`Control::set_tempo`](crate::Control::set_tempo), with the score's own tempo as 1.0. The
+//! conductor's beats are quarter notes (MIDI clock counts 24 to the quarter). Two modes
+//! ([`Follow`]):
+//!
+//! - **Immediate**: the factor is the conductor's BPM over the score's BPM at the present
+//!   point. The rate follows; any phase difference (the performance a little ahead of or
+//!   behind the baton) stays as it is.
+//! - **Phase-following**: the rate as above, and each beat also pulls the playback's phase
+//!   toward the beat. At a beat (its own time, the ictus's, not the time it was recognised),
+//!   the score position is compared with the nearest quarter of the score: an error of `e`
+//!   beats (positive: the performance is ahead) gives a factor `rate × (1 − gain × e)`, with
+//!   `gain × e` limited to ±`limit`. Held for one beat, that makes up `gain × e` beats of
+//!   the error. Defaults: [`PHASE_GAIN`] (half the error each beat) and [`PHASE_LIMIT`] (at
+//!   most 0.15 of a beat each beat, the factor moved by at most ±15 %: a beat never makes
+//!   the music lurch by as much as a sixteenth note; a larger error takes a few beats).
+//!
+//! Score time stays continuous under both (see [`TimeMap`]): a tempo change never skips,
+//! repeats or reorders a note.
+
+use std::collections::VecDeque;
+
+use crate::tempo::{Tempo, TimeMap};
+
+/// The phase-following gain: the share of a beat's phase error made up over the next beat.
+pub const PHASE_GAIN: f64 = 0.5;
+
+/// The phase-following limit: the most one beat may pull the phase, in beats (a factor
+/// change of at most ±15 % over one beat).
+pub const PHASE_LIMIT: f64 = 0.15;
+
+/// The tempo factors the follower gives: a twentieth to twenty times as written (as
+/// `orch play --tempo` takes).
+pub const FACTOR_RANGE: (f64, f64) = (0.05, 20.0);
+
+/// What a conductor said.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Cue {
+    /// Play at this tempo, in quarter notes a minute.
+    Tempo(f64),
+    /// A beat (a quarter note) fell at `t_us` on the performer's clock; `bpm`, the tempo the
+    /// source measured there, if it knows one.
+    Beat {
+        /// The beat's own time (the ictus), µs.
+        t_us: u64,
+        /// The tempo there, quarter notes a minute.
+        bpm: Option<f64>,
+    },
+    /// MIDI Start (0xFA): play from the beginning.
+    Start,
+    /// MIDI Stop (0xFC).
+    Stop,
+    /// MIDI Continue (0xFB).
+    Continue,
+    /// MIDI Song Position Pointer (0xF2): MIDI beats (sixteenth notes) from the start.
+    SongPosition(u16),
+}
+
+/// A cue and when it arrived (µs on the performer's clock).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Timed {
+    /// When it arrived, µs.
+    pub t_us: u64,
+    /// The cue.
+    pub cue: Cue,
+}
+
+/// What went wrong with a tempo source.
+#[derive(Debug)]
+pub enum ConductError {
+    /// Reading the source failed.
+    Io(std::io::Error),
+    /// The source's input cannot be used (a video that cannot be read, a bad packet).
+    Input(String),
+}
+
+impl std::fmt::Display for ConductError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ConductError::Io(e) => write!(f, "reading the tempo source: {e}"),
+            ConductError::Input(e) => write!(f, "the tempo source: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for ConductError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            ConductError::Io(e) => Some(e),
+            ConductError::Input(_) => None,
+        }
+    }
+}
+
+impl From<std::io::Error> for ConductError {
+    fn from(e: std::io::Error) -> Self {
+        ConductError::Io(e)
+    }
+}
+
+/// Anything that conducts: MIDI clock, OSC, tap tempo, the baton tracker.
+pub trait TempoSource {
+    /// The next cue, waiting for it as long as it must; `Ok(None)` when the source has ended.
+    fn next_cue(&mut self) -> Result<Option<Timed>, ConductError>;
+}
+
+/// MIDI clock from raw bytes: 0xF8 24 times a quarter note, Start 0xFA, Stop 0xFC, Continue
+/// 0xFB, Song Position Pointer 0xF2 (two 7-bit data bytes, LSB first). Every other byte is
+/// skipped (real-time bytes may come anywhere, even inside a Song Position message).
+///
+/// While running (after Start or Continue) every 24th clock is a [`Cue::Beat`], the first
+/// being the first clock after Start, at the time of that clock, with the tempo of the last
+/// 24 clocks. Clock without Start gives [`Cue::Tempo`] every 24 clocks.
+#[derive(Clone, Debug, Default)]
+pub struct MidiClock {
+    running: bool,
+    /// Clocks since the position's last quarter note.
+    ticks: u32,
+    /// The times of the last 25 clocks.
+    times: VecDeque<u64>,
+    /// Song Position data bytes so far.
+    spp: Option<Vec<u8>>,
+}
+
+impl MidiClock {
+    /// Clocks to a quarter note.
+    pub const PER_QUARTER: u32 = 24;
+
+    /// A decoder, stopped.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The tempo of the last quarter note of clocks, quarter notes a minute.
+    pub fn bpm(&self) -> Option<f64> {
+        let n = self.times.len();
+        if n < 2 {
+            return None;
+        }
+        let span = self.times[n - 1].saturating_sub(self.times[0]) as f64;
+        (span > 0.0).then(|| 60e6 * (n - 1) as f64 / Self::PER_QUARTER as f64 / span)
+    }
+
+    /// One byte, received at `t_us`.
+    pub fn feed(&mut self, t_us: u64, byte: u8) -> Option<Cue> {
+        match byte {
+            0xF8 => {
+                self.times.push_back(t_us);
+                if self.times.len() > Self::PER_QUARTER as usize + 1 {
+                    self.times.pop_front();
+                }
+                let beat = self.ticks % Self::PER_QUARTER == 0;
+                self.ticks = self.ticks.wrapping_add(1);
+                match (beat, self.running) {
+                    (true, true) => Some(Cue::Beat {
+                        t_us,
+                        bpm: self.bpm(),
+                    }),
+                    (true, false) => self.bpm().map(Cue::Tempo),
+                    _ => None,
+                }
+            }
+            0xFA => {
+                self.running = true;
+                self.ticks = 0;
+                Some(Cue::Start)
+            }
+            0xFB => {
+                self.running = true;
+                Some(Cue::Continue)
+            }
+            0xFC => {
+                self.running = false;
+                Some(Cue::Stop)
+            }
+            0xF9 | 0xFD..=0xFF => None,
+            0xF2 => {
+                self.spp = Some(Vec::new());
+                None
+            }
+            0x80..=0xF7 => {
+                self.spp = None;
+                None
+            }
+            data => {
+                let spp = self.spp.as_mut()?;
+                spp.push(data);
+                if spp.len() < 2 {
+                    return None;
+                }
+                let pos = u16::from(spp[0]) | u16::from(spp[1]) << 7;
+                self.spp = None;
+                // A MIDI beat is a sixteenth: 6 clocks.
+                self.ticks = u32::from(pos) * 6;
+                Some(Cue::SongPosition(pos))
+            }
+        }
+    }
+}
+
+/// Tap tempo: each tap is a beat, its tempo the mean of the last (up to) four intervals. A
+/// pause of more than [`TapTempo::RESTART_US`] starts counting again.
+#[derive(Clone, Debug, Default)]
+pub struct TapTempo {
+    taps: VecDeque<u64>,
+}
+
+impl TapTempo {
+    /// The longest interval between two taps that still counts (2 s: 30 BPM).
+    pub const RESTART_US: u64 = 2_000_000;
+
+    /// No taps yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// A tap at `t_us`.
+    pub fn tap(&mut self, t_us: u64) -> Cue {
+        if self
+            .taps
+            .back()
+            .is_some_and(|&l| t_us <= l || t_us - l > Self::RESTART_US)
+        {
+            self.taps.clear();
+        }
+        self.taps.push_back(t_us);
+        if self.taps.len() > 5 {
+            self.taps.pop_front();
+        }
+        let n = self.taps.len();
+        let bpm = (n >= 2).then(|| {
+            let span = (self.taps[n - 1] - self.taps[0]) as f64;
+            60e6 * (n - 1) as f64 / span
+        });
+        Cue::Beat { t_us, bpm }
+    }
+}
+
+/// A malformed OSC packet.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct OscError(pub String);
+
+impl std::fmt::Display for OscError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "bad OSC packet: {}", self.0)
+    }
+}
+
+impl std::error::Error for OscError {}
+
+/// One OSC argument.
+#[derive(Clone, Debug, PartialEq)]
+pub enum OscArg {
+    /// `i`: a 32-bit integer.
+    Int(i32),
+    /// `f`: a 32-bit float.
+    Float(f32),
+    /// `d`: a 64-bit float.
+    Double(f64),
+    /// `s`: a string.
+    Str(String),
+}
+
+impl OscArg {
+    fn number(&self) -> Option<f64> {
+        match *self {
+            OscArg::Int(i) => Some(f64::from(i)),
+            OscArg::Float(f) => Some(f64::from(f)),
+            OscArg::Double(d) => Some(d),
+            OscArg::Str(_) => None,
+        }
+    }
+}
+
+/// One OSC message.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OscMessage {
+    /// Its address, such as `/orch/tempo`.
+    pub address: String,
+    /// Its arguments.
+    pub args: Vec<OscArg>,
+}
+
+/// Parses an OSC 1.0 packet (a message, or a `#bundle` of them, nested; the bundle's time
+/// tag is ignored: a cue acts when it arrives). Argument types `i`, `f`, `d`, `s`; others
+/// are refused.
+pub fn parse_osc(packet: &[u8]) -> Result<Vec<OscMessage>, OscError> {
+    let mut out = Vec::new();
+    parse_packet(packet, 0, &mut out)?;
+    Ok(out)
+}
+
+fn parse_packet(p: &[u8], depth: u32, out: &mut Vec<OscMessage>) -> Result<(), OscError> {
+    if depth > 8 {
+        return Err(OscError("bundles nested too deep".into()));
+    }
+    if p.starts_with(b"#bundle\0") {
+        let mut at = 16;
+        if p.len() < at {
+            return Err(OscError("bundle without a time tag".into()));
+        }
+        while at < p.len() {
+            let size = read_u32(p, at)? as usize;
+            at += 4;
+            let end = at
+                .checked_add(size)
+                .filter(|&e| e <= p.len())
+                .ok_or_else(|| OscError("bundle element past the end".into()))?;
+            parse_packet(&p[at..end], depth + 1, out)?;
+            at = end;
+        }
+        return Ok(());
+    }
+    let (address, mut at) = read_str(p, 0)?;
+    if !address.starts_with('/') {
+        return Err(OscError(format!(
+            "address {address:?} does not start with /"
+        )));
+    }
+    let mut args = Vec::new();
+    if at < p.len() {
+        let (tags, next) = read_str(p, at)?;
+        at = next;
+        let Some(tags) = tags.strip_prefix(',') else {
+            return Err(OscError("type tags do not start with ,".into()));
+        };
+        for t in tags.chars() {
+            match t {
+                'i' => {
+                    args.push(OscArg::Int(read_u32(p, at)? as i32));
+                    at += 4;
+                }
+                'f' => {
+                    args.push(OscArg::Float(f32::from_bits(read_u32(p, at)?)));
+                    at += 4;
+                }
+                'd' => {
+                    let hi = u64::from(read_u32(p, at)?);
+                    let lo = u64::from(read_u32(p, at + 4)?);
+                    args.push(OscArg::Double(f64::from_bits(hi << 32 | lo)));
+                    at += 8;
+                }
+                's' => {
+                    let (s, next) = read_str(p, at)?;
+                    args.push(OscArg::Str(s));
+                    at = next;
+                }
+                other => return Err(OscError(format!("argument type {other:?} not handled"))),
+            }
+        }
+    }
+    out.push(OscMessage { address, args });
+    Ok(())
+}
+
+fn read_u32(p: &[u8], at: usize) -> Result<u32, OscError> {
+    p.get(at..at + 4)
+        .map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]))
+        .ok_or_else(|| OscError("packet ends inside an argument".into()))
+}
+
+/// A NUL-terminated string padded to 4 bytes; returns it and the offset after the padding.
+fn read_str(p: &[u8], at: usize) -> Result<(String, usize), OscError> {
+    let rest = p.get(at..).unwrap_or_default();
+    let len = rest
+        .iter()
+        .position(|&b| b == 0)
+        .ok_or_else(|| OscError("string without its NUL".into()))?;
+    let s = std::str::from_utf8(&rest[..len])
+        .map_err(|_| OscError("string not UTF-8".into()))?
+        .to_string();
+    Ok((s, at + (len + 4) / 4 * 4))
+}
+
+/// Encodes an OSC message (for tests and for sending cues): arguments `i`, `f`, `d`, `s`.
+pub fn encode_osc(address: &str, args: &[OscArg]) -> Vec<u8> {
+    fn put_str(v: &mut Vec<u8>, s: &str) {
+        v.extend_from_slice(s.as_bytes());
+        v.push(0);
+        while v.len() % 4 != 0 {
+            v.push(0);
+        }
+    }
+    let mut v = Vec::new();
+    put_str(&mut v, address);
+    let tags: String = std::iter::once(',')
+        .chain(args.iter().map(|a| match a {
+            OscArg::Int(_) => 'i',
+            OscArg::Float(_) => 'f',
+            OscArg::Double(_) => 'd',
+            OscArg::Str(_) => 's',
+        }))
+        .collect();
+    put_str(&mut v, &tags);
+    for a in args {
+        match a {
+            OscArg::Int(i) => v.extend_from_slice(&i.to_be_bytes()),
+            OscArg::Float(f) => v.extend_from_slice(&f.to_bits().to_be_bytes()),
+            OscArg::Double(d) => v.extend_from_slice(&d.to_bits().to_be_bytes()),
+            OscArg::Str(s) => put_str(&mut v, s),
+        }
+    }
+    v
+}
+
+/// OSC to cues: `/orch/tempo f` (BPM, `i` and `d` too) is a [`Cue::Tempo`]; `/orch/beat`
+/// (with an optional BPM) is a beat at the packet's arrival, its tempo from the beats before
+/// it (as tap tempo) unless it says one. Other addresses are ignored.
+#[derive(Clone, Debug, Default)]
+pub struct OscCues {
+    beats: TapTempo,
+}
+
+impl OscCues {
+    /// No beats yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The cues of a packet received at `t_us`.
+    pub fn packet(&mut self, t_us: u64, packet: &[u8]) -> Result<Vec<Cue>, OscError> {
+        let mut cues = Vec::new();
+        for m in parse_osc(packet)? {
+            let n = m.args.first().and_then(OscArg::number);
+            match m.address.as_str() {
+                "/orch/tempo" => match n {
+                    Some(bpm) if bpm.is_finite() && bpm > 0.0 => cues.push(Cue::Tempo(bpm)),
+                    _ => return Err(OscError("/orch/tempo needs a tempo above 0".into())),
+                },
+                "/orch/beat" => {
+                    let cue = self.beats.tap(t_us);
+                    cues.push(match (cue, n) {
+                        (Cue::Beat { t_us, .. }, Some(bpm)) if bpm.is_finite() && bpm > 0.0 => {
+                            Cue::Beat {
+                                t_us,
+                                bpm: Some(bpm),
+                            }
+                        }
+                        (c, _) => c,
+                    });
+                }
+                _ => {}
+            }
+        }
+        Ok(cues)
+    }
+}
+
+/// The score's quarter notes, µs of score time, for the follower.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScoreBeats {
+    beats: Vec<u64>,
+}
+
+impl ScoreBeats {
+    /// The quarter notes of `song` (with SMPTE timing, every 500 ms: 120 BPM).
+    pub fn of(song: &orch_seq::Song) -> Self {
+        let beats = match song.ticks_per_quarter() {
+            Some(tpq) => {
+                let n = song.duration_ticks() / u64::from(tpq) + 2;
+                (0..=n)
+                    .map(|i| song.time_at_tick(i * u64::from(tpq)))
+                    .collect()
+            }
+            None => (0..=song.duration_us() / 500_000 + 2)
+                .map(|i| i * 500_000)
+                .collect(),
+        };
+        Self::from_times(beats)
+    }
+
+    /// From the times of the quarter notes (increasing; at least two, or 120 BPM is assumed).
+    pub fn from_times(mut beats: Vec<u64>) -> Self {
+        beats.dedup();
+        if beats.len() < 2 {
+            beats = vec![0, 500_000];
+        }
+        Self { beats }
+    }
+
+    /// Where `score_us` is, in quarter notes from the start, and how long that quarter is
+    /// (µs of score time). Past the end the last quarter's length goes on.
+    pub fn at(&self, score_us: u64) -> (f64, f64) {
+        let b = &self.beats;
+        let i = b
+            .partition_point(|&t| t <= score_us)
+            .saturating_sub(1)
+            .min(b.len() - 2);
+        let len = (b[i + 1] - b[i]) as f64;
+        (i as f64 + (score_us as f64 - b[i] as f64) / len, len)
+    }
+
+    /// The score's tempo at `score_us`, quarter notes a minute.
+    pub fn bpm(&self, score_us: u64) -> f64 {
+        60e6 / self.at(score_us).1
+    }
+}
+
+/// How the follower follows. See the [module notes](self).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Follow {
+    /// The rate only.
+    Immediate,
+    /// The rate, and each beat pulls the phase.
+    Phase {
+        /// The share of the phase error made up over the next beat.
+        gain: f64,
+        /// The most one beat may pull, in beats.
+        limit: f64,
+    },
+}
+
+impl Follow {
+    /// Phase-following with [`PHASE_GAIN`] and [`PHASE_LIMIT`].
+    pub const PHASE: Follow = Follow::Phase {
+        gain: PHASE_GAIN,
+        limit: PHASE_LIMIT,
+    };
+}
+
+/// What the performance should do after a cue.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Action {
+    /// Play at this factor from now on.
+    Tempo(Tempo),
+    /// The transport: stop (Stop).
+    Pause,
+    /// The transport: go on (Continue, Start).
+    Resume,
+    /// Nothing to change.
+    Nothing,
+}
+
+/// Turns cues into tempo factors. See the [module notes](self).
+#[derive(Clone, Debug)]
+pub struct Follower {
+    beats: ScoreBeats,
+    follow: Follow,
+    bpm: Option<f64>,
+}
+
+impl Follower {
+    /// A follower of a score whose quarter notes are `beats`.
+    pub fn new(beats: ScoreBeats, follow: Follow) -> Self {
+        Self {
+            beats,
+            follow,
+            bpm: None,
+        }
+    }
+
+    /// The conductor's tempo, as last heard (quarter notes a minute).
+    pub fn bpm(&self) -> Option<f64> {
+        self.bpm
+    }
+
+    /// What to do about `cue`, the performance's time map being `map` (`None` before it
+    /// starts: then only a tempo can be taken).
+    pub fn cue(&mut self, cue: &Cue, map: Option<&TimeMap>) -> Action {
+        let (bpm, beat_at) = match *cue {
+            Cue::Tempo(bpm) => (Some(bpm), None),
+            Cue::Beat { t_us, bpm } => (bpm, Some(t_us)),
+            Cue::Stop => return Action::Pause,
+            Cue::Start | Cue::Continue => return Action::Resume,
+            Cue::SongPosition(_) => return Action::Nothing,
+        };
+        let Some(bpm) = bpm.filter(|b| b.is_finite() && *b > 0.0) else {
+            return Action::Nothing;
+        };
+        self.bpm = Some(bpm);
+        let now_score = map.map_or(0, |m| m.score(beat_at.unwrap_or(0) as i64));
+        let mut factor = bpm / self.beats.bpm(now_score);
+        if let (Follow::Phase { gain, limit }, Some(t), Some(m)) = (self.follow, beat_at, map) {
+            let (pos, _) = self.beats.at(m.score(t as i64));
+            // Before the first beat of the score the conductor is giving an upbeat: no pull.
+            if pos > 0.0 {
+                let err = pos - pos.round();
+                let pull = (-gain * err).clamp(-limit, limit);
+                factor *= 1.0 + pull;
+            }
+        }
+        let factor = factor.clamp(FACTOR_RANGE.0, FACTOR_RANGE.1);
+        Tempo::new(factor).map_or(Action::Nothing, Action::Tempo)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn midi_clock_beats_every_24_clocks_with_its_tempo() {
+        let mut c = MidiClock::new();
+        assert_eq!(c.feed(0, 0xFA), Some(Cue::Start));
+        // 120 BPM: a clock every 500_000 / 24 µs.
+        let mut beats = Vec::new();
+        for i in 0..49u64 {
+            let t = i * 500_000 / 24;
+            // A real-time byte inside nothing, and a Note-On's bytes: skipped.
+            assert_eq!(c.feed(t, 0xFE), None);
+            if let Some(cue) = c.feed(t, 0xF8) {
+                beats.push(cue);
+            }
+        }
+        assert_eq!(beats.len(), 3);
+        let Cue::Beat { t_us, bpm } = beats[2] else {
+            panic!("{beats:?}")
+        };
+        assert_eq!(t_us, 1_000_000);
+        assert!((bpm.unwrap() - 120.0).abs() < 0.01, "{bpm:?}");
+        assert_eq!(c.feed(2_000_000, 0xFC), Some(Cue::Stop));
+        // Song position 0x0102 sixteenths, a clock byte inside the message.
+        assert_eq!(c.feed(2_000_000, 0xF2), None);
+        assert_eq!(c.feed(2_000_000, 0x02), None);
+        assert_eq!(c.feed(2_000_000, 0xF8), None);
+        assert_eq!(c.feed(2_000_000, 0x02), Some(Cue::SongPosition(2 | 2 << 7)));
+        assert_eq!(c.feed(2_000_000, 0xFB), Some(Cue::Continue));
+    }
+
+    #[test]
+    fn osc_messages_and_bundles_parse() {
+        let m = encode_osc("/orch/tempo", &[OscArg::Float(96.5)]);
+        assert_eq!(m.len(), 20);
+        assert_eq!(
+            parse_osc(&m).unwrap(),
+            vec![OscMessage {
+                address: "/orch/tempo".into(),
+                args: vec![OscArg::Float(96.5)]
+            }]
+        );
+        let beat = encode_osc("/orch/beat", &[]);
+        let mut bundle = b"#bundle\0\0\0\0\0\0\0\0\x01".to_vec();
+        for p in [&m, &beat] {
+            bundle.extend_from_slice(&(p.len() as u32).to_be_bytes());
+            bundle.extend_from_slice(p);
+        }
+        let mut cues = OscCues::new();
+        assert_eq!(
+            cues.packet(5, &bundle).unwrap(),
+            vec![Cue::Tempo(96.5), Cue::Beat { t_us: 5, bpm: None }]
+        );
+        assert_eq!(
+            cues.packet(500_005, &beat).unwrap(),
+            vec![Cue::Beat {
+                t_us: 500_005,
+                bpm: Some(120.0)
+            }]
+        );
+        for bad in [&m[..10], b"orch\0\0\0\0", &bundle[..20], b"/x\0\0,q\0\0"] {
+            assert!(parse_osc(bad).is_err(), "{bad:?}");
+        }
+        assert!(cues
+            .packet(0, &encode_osc("/orch/tempo", &[OscArg::Int(-3)]))
+            .is_err());
+    }
+
+    #[test]
+    fn tap_tempo_averages_and_restarts() {
+        let mut t = TapTempo::new();
+        assert_eq!(t.tap(0), Cue::Beat { t_us: 0, bpm: None });
+        t.tap(600_000);
+        let Cue::Beat { bpm, .. } = t.tap(1_100_000) else {
+            unreachable!()
+        };
+        // Two intervals, 600 and 500 ms: 1.1 s for two beats.
+        assert!((bpm.unwrap() - 60e6 * 2.0 / 1.1e6).abs() < 1e-9);
+        assert_eq!(
+            t.tap(5_000_000),
+            Cue::Beat {
+                t_us: 5_000_000,
+                bpm: None
+            }
+        );
+    }
+
+    #[test]
+    fn phase_following_pulls_by_the_gain_within_the_limit() {
+        // A score at 120 BPM, played as written from wall 0.
+        let beats = ScoreBeats::from_times((0..100).map(|i| i * 500_000).collect());
+        let map = TimeMap::new(0, Tempo::NORMAL);
+        let mut imm = Follower::new(beats.clone(), Follow::Immediate);
+        let mut ph = Follower::new(beats, Follow::PHASE);
+        // The conductor's beat at 4.1 beats of the score: the performance is 0.1 beat ahead.
+        let cue = Cue::Beat {
+            t_us: 2_050_000,
+            bpm: Some(90.0),
+        };
+        assert_eq!(
+            imm.cue(&cue, Some(&map)),
+            Action::Tempo(Tempo::new(0.75).unwrap())
+        );
+        let Action::Tempo(t) = ph.cue(&cue, Some(&map)) else {
+            panic!()
+        };
+        assert!(
+            (t.get() - 0.75 * (1.0 - PHASE_GAIN * 0.1)).abs() < 1e-9,
+            "{t:?}"
+        );
+        // 0.45 beat behind: the pull is limited.
+        let cue = Cue::Beat {
+            t_us: 2_275_000, // 4.55 beats: 0.45 behind
+            bpm: Some(120.0),
+        };
+        let Action::Tempo(t) = ph.cue(&cue, Some(&map)) else {
+            panic!()
+        };
+        assert!((t.get() - (1.0 + PHASE_LIMIT)).abs() < 1e-9, "{t:?}");
+        assert_eq!(ph.cue(&Cue::Stop, Some(&map)), Action::Pause);
+    }
+}

@@ -1,0 +1,235 @@
+//! Following a conductor on the virtual clock: the source's bytes are fed at their times,
+//! the follower's tempo goes to the performer through `Control`, and the performance's
+//! position is checked against the conductor's beats.
+
+use std::sync::Arc;
+
+use orch_perform::conduct::{encode_osc, OscArg};
+use orch_perform::{
+    perform, song_events, thesis_config, Action, Control, Cue, Follow, Follower, Link, MidiClock,
+    MidiRecording, OscCues, ScoreBeats, Setup, Tempo,
+};
+use orch_seq::{Clock, Lateness, Song, VirtualClock};
+
+/// A Standard MIDI File: `beats` quarter notes at `bpm` (480 ticks a quarter), one note each,
+/// half a beat long.
+fn quarters(beats: u32, bpm: f64) -> Song {
+    let mut trk = Vec::new();
+    let upq = (60e6 / bpm).round() as u32;
+    trk.extend_from_slice(&[0x00, 0xFF, 0x51, 0x03]);
+    trk.extend_from_slice(&upq.to_be_bytes()[1..]);
+    for i in 0..beats {
+        let n = 48 + (i % 24) as u8;
+        // On at the quarter, off 240 ticks later, the next on 240 ticks after that.
+        let delta: &[u8] = if i == 0 { &[0x00] } else { &[0x81, 0x70] };
+        trk.extend_from_slice(delta);
+        trk.extend_from_slice(&[0x90, n, 100, 0x81, 0x70, 0x80, n, 0]);
+    }
+    trk.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
+    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
+    smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
+    smf.extend_from_slice(&trk);
+    Song::parse(&smf).unwrap()
+}
+
+/// A clock whose waits deliver the conductor's input falling inside them: each input at its
+/// own time (µs after the score's start) goes through `apply`, which may steer `control`.
+struct Conducted<F: FnMut(u64, &Control)> {
+    inner: VirtualClock,
+    /// Times (from the score's start) at which `apply` is called, in order.
+    times: Vec<u64>,
+    next: usize,
+    start: Option<u64>,
+    control: Arc<Control>,
+    apply: F,
+}
+
+impl<F: FnMut(u64, &Control)> Clock for Conducted<F> {
+    fn now_us(&self) -> u64 {
+        self.inner.now_us()
+    }
+
+    fn wait_until(&mut self, deadline_us: u64) -> u64 {
+        if self.start.is_none() {
+            self.start = self.control.time_map().map(|m| m.wall(0).max(0) as u64);
+        }
+        if let Some(s) = self.start {
+            while let Some(&t) = self.times.get(self.next) {
+                if s + t > deadline_us {
+                    break;
+                }
+                self.inner.advance_to(s + t);
+                (self.apply)(s + t, &self.control);
+                self.next += 1;
+            }
+        }
+        self.inner.wait_until(deadline_us)
+    }
+
+    fn lateness(&self) -> Lateness {
+        self.inner.lateness()
+    }
+}
+
+fn setup() -> Setup {
+    Setup {
+        config: thesis_config(),
+        sim: orch_sim::SimConfig::thesis(),
+        compensation: true,
+        tempo: Tempo::NORMAL,
+        link: Link::Direct,
+    }
+}
+
+/// MIDI clock from `from` to `to` BPM over `ramp` beats, then steady for `hold` beats: the
+/// times of its clocks, from the first (the first beat, at the score's start).
+fn clock_ramp(from: f64, to: f64, ramp: u32, hold: u32) -> Vec<u64> {
+    let mut t = 0.0;
+    let mut v = Vec::new();
+    for b in 0..ramp + hold {
+        let bpm = from + (to - from) * f64::from(b.min(ramp)) / f64::from(ramp);
+        let beat = 60e6 / bpm;
+        for i in 0..24 {
+            v.push((t + beat * f64::from(i) / 24.0).round() as u64);
+        }
+        t += beat;
+    }
+    v.push(t.round() as u64);
+    v
+}
+
+/// Plays `song` following a MIDI clock (Start, then `clocks`) with `follow`; returns, at each
+/// of the clock's beats, the performance's position minus the beat's number (in beats), the
+/// last tempo factor, and the report's checks.
+fn follow_clock(song: &Song, clocks: &[u64], follow: Follow) -> (Vec<f64>, f64) {
+    let control = Control::new();
+    let beats = ScoreBeats::of(song);
+    let mut follower = Follower::new(beats.clone(), follow);
+    let mut decoder = MidiClock::new();
+    let mut errors = Vec::new();
+    let mut times = vec![0u64];
+    times.extend_from_slice(clocks);
+    let mut first = true;
+    let mut clock = Conducted {
+        inner: VirtualClock::new(),
+        times,
+        next: 0,
+        start: None,
+        control: Arc::clone(&control),
+        apply: |t: u64, c: &Control| {
+            // Start comes just before the first clock (at the same µs here).
+            let byte = if std::mem::take(&mut first) {
+                0xFA
+            } else {
+                0xF8
+            };
+            let Some(cue) = decoder.feed(t, byte) else {
+                return;
+            };
+            let map = c.time_map();
+            if let (Cue::Beat { t_us, .. }, Some(m)) = (cue, map) {
+                let (pos, _) = beats.at(m.score(t_us as i64));
+                errors.push(pos - errors.len() as f64);
+            }
+            if let Action::Tempo(tempo) = follower.cue(&cue, map.as_ref()) {
+                c.set_tempo(tempo);
+            }
+        },
+    };
+    let mut live = |_: &orch_perform::Live| {};
+    let played = perform::<_, MidiRecording>(
+        &setup(),
+        song_events(song),
+        song.notes(),
+        None,
+        &mut clock,
+        Some(&control),
+        Some(&mut live),
+    )
+    .unwrap();
+    let r = played.report(None);
+    assert!(r.adds_up(), "{r:?}");
+    assert_eq!(r.unmatched, 0);
+    assert_eq!(r.outcomes.dropped.total(), 0, "{r:?}");
+    // Every note struck once: on time or late, never twice, never skipped.
+    assert_eq!(r.strikes, song.notes() as u64);
+    let factor = control.time_map().unwrap().tempo().get();
+    (errors, factor)
+}
+
+#[test]
+fn a_midi_clock_speeding_up_from_100_to_130_bpm_is_followed_within_two_beats() {
+    // The score is written at 100 BPM; the conductor's clock goes from 100 to 130 over 32
+    // beats and holds 130 for 24 more. Not following, the performance would end 9 beats behind.
+    let song = quarters(64, 100.0);
+    let clocks = clock_ramp(100.0, 130.0, 32, 24);
+    for follow in [Follow::Immediate, Follow::PHASE] {
+        let (errors, factor) = follow_clock(&song, &clocks, follow);
+        assert_eq!(errors.len(), 57, "{follow:?}");
+        let worst = errors.iter().fold(0f64, |a, e| a.max(e.abs()));
+        let last = errors.last().unwrap();
+        println!(
+            "{follow:?}: position - beat, worst {worst:.3} beats, at the last beat {last:+.3}; \
+             tempo at the end {:.1} BPM",
+            factor * 100.0
+        );
+        assert!(worst <= 2.0, "{follow:?}: {errors:?}");
+        assert!((factor * 100.0 - 130.0).abs() < 1.0, "{follow:?}: {factor}");
+        if matches!(follow, Follow::Phase { .. }) {
+            // The phase is pulled in: at the end the beats and the score's quarters agree.
+            assert!(last.abs() < 0.05, "{errors:?}");
+        }
+    }
+}
+
+#[test]
+fn osc_tempo_messages_are_parsed_and_applied() {
+    let song = quarters(16, 120.0);
+    let control = Control::new();
+    let mut follower = Follower::new(ScoreBeats::of(&song), Follow::Immediate);
+    let mut osc = OscCues::new();
+    // At 2 s into the score the conductor says 90 BPM, as a float; at 4 s, 180 as a double.
+    let packets = [
+        encode_osc("/orch/tempo", &[OscArg::Float(90.0)]),
+        encode_osc("/orch/tempo", &[OscArg::Double(180.0)]),
+    ];
+    let mut applied = Vec::new();
+    let mut k = 0;
+    let mut clock = Conducted {
+        inner: VirtualClock::new(),
+        times: vec![2_000_000, 4_000_000],
+        next: 0,
+        start: None,
+        control: Arc::clone(&control),
+        apply: |t: u64, c: &Control| {
+            for cue in osc.packet(t, &packets[k]).unwrap() {
+                if let Action::Tempo(tempo) = follower.cue(&cue, c.time_map().as_ref()) {
+                    c.set_tempo(tempo);
+                    applied.push(tempo.get());
+                }
+            }
+            k += 1;
+        },
+    };
+    let mut live = |_: &orch_perform::Live| {};
+    let played = perform::<_, MidiRecording>(
+        &setup(),
+        song_events(&song),
+        song.notes(),
+        None,
+        &mut clock,
+        Some(&control),
+        Some(&mut live),
+    )
+    .unwrap();
+    assert_eq!(applied, vec![0.75, 1.5]);
+    let r = played.report(None);
+    assert_eq!(r.strikes, 16);
+    // Where each note was due on the wall clock: 4 intervals at 120 BPM (2 s), 3 at 90 (2 s),
+    // the last 8 at 180 (2.67 s). A change is taken at the performer's next wake, up to 40 ms
+    // after it arrives: the spans may be off by that much of the difference in rate.
+    let due: Vec<i64> = played.records.iter().map(|r| r.score_at_us).collect();
+    let span = due[15] - due[0];
+    assert!((span - 6_666_667).abs() < 30_000, "{due:?}");
+    assert!((due[7] - due[4] - 2_000_000).abs() < 15_000, "{due:?}");
+}

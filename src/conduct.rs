@@ -1,0 +1,496 @@
+//! `orch conduct`: a Standard MIDI File played live, following a conductor: a baton video
+//! (through `orch-baton`), tap tempo (a key in the live view), incoming MIDI clock (raw bytes
+//! from standard input, a file or device, or a UDP port) or OSC over UDP. Each source is an
+//! `orch_perform::TempoSource`; the follower (`orch_perform::Follower`) turns its cues into
+//! tempo changes of the performance, through the performance's `Control`.
+
+use std::io::Read;
+use std::net::{SocketAddr, UdpSocket};
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{self, Receiver};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use orch_baton::source::{self, FrameSource};
+use orch_baton::{Baton, Frame};
+use orch_perform::{
+    Action, ConductError, Control, Cue, Follow, Follower, MidiClock, OscCues, ScoreBeats, TapTempo,
+    Tempo, TempoSource, Timed,
+};
+
+use crate::cli::{ConductArgs, FollowMode};
+use crate::error::bad_input;
+use crate::play::{self, Conductor, LiveOptions};
+
+/// Where the conductor is.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SourceSpec {
+    /// `baton:VIDEO`: a video of a baton with a red LED, played in real time from the score's
+    /// start.
+    Baton(PathBuf),
+    /// `tap`: the space bar (or any key but q) in the live view.
+    Tap,
+    /// `midi-clock:IN`: raw MIDI bytes carrying clock.
+    MidiClock(ClockIn),
+    /// `osc:PORT` or `osc:HOST:PORT` (127.0.0.1 unless a host is given).
+    Osc(SocketAddr),
+}
+
+/// Where MIDI clock bytes come from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ClockIn {
+    /// `-`: standard input.
+    Stdin,
+    /// A file, FIFO or raw MIDI device, read as its bytes arrive.
+    File(PathBuf),
+    /// `udp:PORT` or `udp:HOST:PORT`: datagrams of raw bytes (127.0.0.1 unless a host is given).
+    Udp(SocketAddr),
+}
+
+fn udp_addr(s: &str) -> Result<SocketAddr, String> {
+    if let Ok(port) = s.parse::<u16>() {
+        return Ok(SocketAddr::from(([127, 0, 0, 1], port)));
+    }
+    s.parse::<SocketAddr>()
+        .map_err(|_| format!("{s:?} is not PORT or HOST:PORT (such as 9000 or 0.0.0.0:9000)"))
+}
+
+impl SourceSpec {
+    /// Parses `--source`.
+    pub fn parse(s: &str) -> Result<Self, String> {
+        if s == "tap" {
+            return Ok(SourceSpec::Tap);
+        }
+        let (kind, rest) = s.split_once(':').ok_or_else(|| {
+            format!("--source {s}: give baton:VIDEO, tap, midi-clock:IN or osc:PORT")
+        })?;
+        let bad = |m: String| format!("--source {s}: {m}");
+        match kind {
+            "baton" if !rest.is_empty() => Ok(SourceSpec::Baton(PathBuf::from(rest))),
+            "midi-clock" => Ok(SourceSpec::MidiClock(match rest {
+                "-" => ClockIn::Stdin,
+                r if r.starts_with("udp:") => ClockIn::Udp(udp_addr(&r[4..]).map_err(bad)?),
+                "" => return Err(bad("give IN: -, a file, or udp:PORT".into())),
+                r => ClockIn::File(PathBuf::from(r)),
+            })),
+            "osc" => Ok(SourceSpec::Osc(udp_addr(rest).map_err(bad)?)),
+            _ => Err(format!(
+                "--source {s}: give baton:VIDEO, tap, midi-clock:IN or osc:PORT"
+            )),
+        }
+    }
+}
+
+/// The performer's clock: µs since `origin`.
+#[derive(Clone, Copy, Debug)]
+struct Stamp(Instant);
+
+impl Stamp {
+    fn now_us(self) -> u64 {
+        u64::try_from(self.0.elapsed().as_micros()).unwrap_or(u64::MAX)
+    }
+}
+
+/// MIDI clock from a byte stream, each byte stamped when it is read.
+struct ClockBytes<R: Read> {
+    reader: R,
+    decoder: MidiClock,
+    pending: std::collections::VecDeque<Timed>,
+    stamp: Stamp,
+}
+
+impl<R: Read> TempoSource for ClockBytes<R> {
+    fn next_cue(&mut self) -> Result<Option<Timed>, ConductError> {
+        let mut buf = [0u8; 256];
+        loop {
+            if let Some(c) = self.pending.pop_front() {
+                return Ok(Some(c));
+            }
+            let n = match self.reader.read(&mut buf) {
+                Ok(0) => return Ok(None),
+                Ok(n) => n,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                Err(e) => return Err(e.into()),
+            };
+            let t_us = self.stamp.now_us();
+            for &b in &buf[..n] {
+                if let Some(cue) = self.decoder.feed(t_us, b) {
+                    self.pending.push_back(Timed { t_us, cue });
+                }
+            }
+        }
+    }
+}
+
+/// UDP datagrams, each stamped when it arrives: MIDI clock bytes or OSC packets.
+struct Datagrams {
+    socket: UdpSocket,
+    kind: Datagram,
+    pending: std::collections::VecDeque<Timed>,
+    stamp: Stamp,
+}
+
+enum Datagram {
+    Clock(MidiClock),
+    Osc(OscCues),
+}
+
+impl TempoSource for Datagrams {
+    fn next_cue(&mut self) -> Result<Option<Timed>, ConductError> {
+        let mut buf = vec![0u8; 65_536];
+        loop {
+            if let Some(c) = self.pending.pop_front() {
+                return Ok(Some(c));
+            }
+            let n = self.socket.recv(&mut buf)?;
+            let t_us = self.stamp.now_us();
+            match &mut self.kind {
+                Datagram::Clock(d) => {
+                    for &b in &buf[..n] {
+                        if let Some(cue) = d.feed(t_us, b) {
+                            self.pending.push_back(Timed { t_us, cue });
+                        }
+                    }
+                }
+                Datagram::Osc(o) => match o.packet(t_us, &buf[..n]) {
+                    Ok(cues) => self
+                        .pending
+                        .extend(cues.into_iter().map(|cue| Timed { t_us, cue })),
+                    // One bad packet is said and skipped: the next may be good.
+                    Err(e) => tracing::warn!("{e}"),
+                },
+            }
+        }
+    }
+}
+
+/// A baton video played in real time from the score's start: each beat the tracker finds is
+/// a cue at its ictus (the video's time 0 being the score's time 0 on the performer's clock).
+struct BatonVideo {
+    frames: Box<dyn FrameSource>,
+    baton: Baton,
+    frame: Frame,
+    control: Arc<Control>,
+    start_us: Option<u64>,
+    stamp: Stamp,
+}
+
+impl TempoSource for BatonVideo {
+    fn next_cue(&mut self) -> Result<Option<Timed>, ConductError> {
+        let start = match self.start_us {
+            Some(s) => s,
+            None => loop {
+                if let Some(m) = self.control.time_map() {
+                    let s = m.wall(0).max(0) as u64;
+                    self.start_us = Some(s);
+                    break s;
+                }
+                std::thread::sleep(Duration::from_millis(1));
+            },
+        };
+        loop {
+            let Some(t_ms) = self
+                .frames
+                .next_frame(&mut self.frame)
+                .map_err(|e| ConductError::Input(e.to_string()))?
+            else {
+                return Ok(None);
+            };
+            // The frame is seen when it is taken, not before.
+            let due = start + (t_ms * 1000.0).round() as u64;
+            let now = self.stamp.now_us();
+            if due > now {
+                std::thread::sleep(Duration::from_micros(due - now));
+            }
+            if let Some(b) = self.baton.push(t_ms, &self.frame) {
+                let cue = Cue::Beat {
+                    t_us: start + (b.t_ms * 1000.0).round().max(0.0) as u64,
+                    bpm: b.bpm,
+                };
+                return Ok(Some(Timed {
+                    t_us: self.stamp.now_us(),
+                    cue,
+                }));
+            }
+        }
+    }
+}
+
+/// Taps from the live view.
+struct Taps {
+    rx: Receiver<u64>,
+    tap: TapTempo,
+}
+
+impl TempoSource for Taps {
+    fn next_cue(&mut self) -> Result<Option<Timed>, ConductError> {
+        Ok(self.rx.recv().ok().map(|t_us| Timed {
+            t_us,
+            cue: self.tap.tap(t_us),
+        }))
+    }
+}
+
+/// What the conductor has done so far, for the view and the summary.
+#[derive(Clone, Debug, Default)]
+pub struct Status {
+    /// Beats heard.
+    pub beats: u64,
+    /// The conductor's tempo as last heard, quarter notes a minute.
+    pub bpm: Option<f64>,
+    /// The tempo factor last asked of the performance.
+    pub factor: Option<f64>,
+    /// Paused by the conductor (MIDI Stop).
+    pub paused: bool,
+    /// The source ended or failed: why.
+    pub ended: Option<String>,
+}
+
+impl Status {
+    fn line(&self, source: &str) -> String {
+        let mut s = format!("conductor {source}: {} beats", self.beats);
+        if let Some(b) = self.bpm {
+            s += &format!(", {b:.1} BPM");
+        }
+        if let Some(f) = self.factor {
+            s += &format!(", tempo x{f:.3}");
+        }
+        if self.paused {
+            s += ", paused";
+        }
+        if let Some(e) = &self.ended {
+            s += &format!(" ({e})");
+        }
+        s
+    }
+}
+
+/// Hands each cue of `source` to the follower and the follower's answer to `control`, until
+/// the source ends.
+pub fn follow(
+    mut source: Box<dyn TempoSource>,
+    mut follower: Follower,
+    control: &Control,
+    status: &Mutex<Status>,
+) {
+    let set = |f: &dyn Fn(&mut Status)| f(&mut status.lock().unwrap_or_else(|e| e.into_inner()));
+    loop {
+        let cue = match source.next_cue() {
+            Ok(Some(c)) => c,
+            Ok(None) => {
+                set(&|s| s.ended = Some("its input ended".into()));
+                return;
+            }
+            Err(e) => {
+                tracing::warn!("{e}");
+                set(&|s| s.ended = Some(e.to_string()));
+                return;
+            }
+        };
+        if control.stopping() {
+            return;
+        }
+        let action = follower.cue(&cue.cue, control.time_map().as_ref());
+        let bpm = follower.bpm();
+        let is_beat = matches!(cue.cue, Cue::Beat { .. });
+        match action {
+            Action::Tempo(t) => control.set_tempo(t),
+            Action::Pause => control.pause(),
+            Action::Resume => control.resume(),
+            Action::Nothing => {}
+        }
+        set(&|s| {
+            s.beats += u64::from(is_beat);
+            s.bpm = bpm.or(s.bpm);
+            if let Action::Tempo(t) = action {
+                s.factor = Some(t.get());
+            }
+            s.paused = control.paused();
+        });
+    }
+}
+
+fn open_source(
+    spec: &SourceSpec,
+    control: &Arc<Control>,
+    stamp: Stamp,
+    taps: Option<Receiver<u64>>,
+) -> anyhow::Result<Box<dyn TempoSource>> {
+    let pending = std::collections::VecDeque::new();
+    Ok(match spec {
+        SourceSpec::Baton(path) => {
+            let frames = source::open(path, None).map_err(|e| match e {
+                source::SourceError::BadInput(m) => bad_input(format!("--source baton: {m}")),
+                source::SourceError::Io(e) => anyhow::Error::new(e).context("reading the video"),
+            })?;
+            Box::new(BatonVideo {
+                frames,
+                baton: Baton::default(),
+                frame: Frame::default(),
+                control: Arc::clone(control),
+                start_us: None,
+                stamp,
+            })
+        }
+        SourceSpec::Tap => Box::new(Taps {
+            rx: taps.expect("tap has its channel"),
+            tap: TapTempo::new(),
+        }),
+        SourceSpec::MidiClock(ClockIn::Stdin) => Box::new(ClockBytes {
+            reader: std::io::stdin(),
+            decoder: MidiClock::new(),
+            pending,
+            stamp,
+        }),
+        SourceSpec::MidiClock(ClockIn::File(path)) => Box::new(ClockBytes {
+            reader: std::fs::File::open(path)
+                .map_err(|e| bad_input(format!("--source midi-clock:{}: {e}", path.display())))?,
+            decoder: MidiClock::new(),
+            pending,
+            stamp,
+        }),
+        SourceSpec::MidiClock(ClockIn::Udp(addr)) | SourceSpec::Osc(addr) => {
+            let socket = UdpSocket::bind(addr)
+                .map_err(|e| bad_input(format!("--source: cannot listen on UDP {addr}: {e}")))?;
+            let kind = match spec {
+                SourceSpec::Osc(_) => Datagram::Osc(OscCues::new()),
+                _ => Datagram::Clock(MidiClock::new()),
+            };
+            Box::new(Datagrams {
+                socket,
+                kind,
+                pending,
+                stamp,
+            })
+        }
+    })
+}
+
+/// Runs `orch conduct`.
+pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
+    play::init_logging(args.verbose);
+    let spec = SourceSpec::parse(&args.source).map_err(bad_input)?;
+    let tap = spec == SourceSpec::Tap;
+    if tap && (args.no_view || !std::io::IsTerminal::is_terminal(&std::io::stdout())) {
+        return Err(bad_input(
+            "--source tap: the taps are keys in the live view; run it in a terminal, without \
+             --no-view",
+        ));
+    }
+    let song = play::load_song(&args.file)?;
+    let robot = play::load_robot(args.robot.as_deref())?;
+    let setup = play::setup(&robot, !args.no_compensation, Tempo::NORMAL);
+    let lanes = play::open_lanes(play::out_specs(&args.outs)?, &setup)?;
+    let follow_mode = match args.follow {
+        FollowMode::Immediate => Follow::Immediate,
+        FollowMode::Phase => Follow::PHASE,
+    };
+    let follower = Follower::new(ScoreBeats::of(&song), follow_mode);
+    let control = Control::new();
+    // A conductor's change is taken within 5 ms (the view is still drawn every 20 ms).
+    control.poll_every(5_000);
+    let origin = Instant::now();
+    let stamp = Stamp(origin);
+    let (tap_tx, tap_rx) = mpsc::channel();
+    let status = Arc::new(Mutex::new(Status::default()));
+    {
+        // The source is opened on its own thread (a video's frame source stays there); an
+        // input that cannot be opened comes back here before anything plays.
+        let (control, status) = (Arc::clone(&control), Arc::clone(&status));
+        let (opened_tx, opened) = mpsc::channel();
+        let spec = spec.clone();
+        let taps = tap.then_some(tap_rx);
+        // Detached: a source blocked on its input ends with the process.
+        std::thread::spawn(move || match open_source(&spec, &control, stamp, taps) {
+            Ok(source) => {
+                let _ = opened_tx.send(Ok(()));
+                follow(source, follower, &control, &status);
+            }
+            Err(e) => {
+                let _ = opened_tx.send(Err(e));
+            }
+        });
+        opened
+            .recv()
+            .map_err(|_| anyhow::anyhow!("the tempo source's thread ended"))??;
+    }
+    let name = source_name(&spec);
+    let status_line = || status.lock().unwrap_or_else(|e| e.into_inner()).line(&name);
+    let mut on_key = |c: char| {
+        if tap && c != 'q' {
+            let _ = tap_tx.send(stamp.now_us());
+        }
+    };
+    let played = play::play_live(
+        song,
+        lanes,
+        LiveOptions {
+            view: !args.no_view,
+            file: &args.file,
+            conductor: Some(Conductor {
+                control: Arc::clone(&control),
+                origin,
+                status: &status_line,
+                on_key: &mut on_key,
+            }),
+        },
+    )?;
+    if !args.json {
+        println!("{}", status_line());
+    }
+    play::print_reports(&played, args.json, &args.file, !args.outs.is_empty())
+}
+
+fn source_name(spec: &SourceSpec) -> String {
+    let file = |p: &Path| {
+        p.file_name()
+            .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into())
+    };
+    match spec {
+        SourceSpec::Baton(p) => format!("baton {}", file(p)),
+        SourceSpec::Tap => "tap (space)".into(),
+        SourceSpec::MidiClock(ClockIn::Stdin) => "MIDI clock on stdin".into(),
+        SourceSpec::MidiClock(ClockIn::File(p)) => format!("MIDI clock {}", file(p)),
+        SourceSpec::MidiClock(ClockIn::Udp(a)) => format!("MIDI clock udp {a}"),
+        SourceSpec::Osc(a) => format!("OSC udp {a}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sources_parse() {
+        assert_eq!(SourceSpec::parse("tap"), Ok(SourceSpec::Tap));
+        assert_eq!(
+            SourceSpec::parse("baton:v.y4m"),
+            Ok(SourceSpec::Baton("v.y4m".into()))
+        );
+        assert_eq!(
+            SourceSpec::parse("midi-clock:-"),
+            Ok(SourceSpec::MidiClock(ClockIn::Stdin))
+        );
+        assert_eq!(
+            SourceSpec::parse("midi-clock:udp:9000"),
+            Ok(SourceSpec::MidiClock(ClockIn::Udp(
+                "127.0.0.1:9000".parse().unwrap()
+            )))
+        );
+        assert_eq!(
+            SourceSpec::parse("osc:0.0.0.0:57120"),
+            Ok(SourceSpec::Osc("0.0.0.0:57120".parse().unwrap()))
+        );
+        for bad in [
+            "",
+            "osc:",
+            "osc:x",
+            "baton:",
+            "midi-clock:",
+            "clock:3",
+            "midi-clock:udp:70000",
+        ] {
+            assert!(SourceSpec::parse(bad).is_err(), "{bad}");
+        }
+    }
+}

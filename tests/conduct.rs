@@ -1,0 +1,318 @@
+//! `orch conduct`: a baton video drawn by orch-baton's harness conducts a piece (on the
+//! virtual clock, in-process), and the command line with its sources (in real time).
+
+use std::io::Write;
+use std::process::{Command, Stdio};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use orch_baton::synth::{Script, Video};
+use orch_baton::Baton;
+use orch_perform::{
+    perform, song_events, Action, Control, Cue, Follow, Follower, MidiRecording, ScoreBeats, Tempo,
+};
+use orch_seq::{Clock, Lateness, Song, VirtualClock};
+
+/// A Standard MIDI File: `beats` quarter notes at `bpm` (480 ticks a quarter), one note each,
+/// half a beat long.
+fn quarters_smf(beats: u32, bpm: f64) -> Vec<u8> {
+    let mut trk = Vec::new();
+    let upq = (60e6 / bpm).round() as u32;
+    trk.extend_from_slice(&[0x00, 0xFF, 0x51, 0x03]);
+    trk.extend_from_slice(&upq.to_be_bytes()[1..]);
+    for i in 0..beats {
+        let n = 48 + (i % 24) as u8;
+        let delta: &[u8] = if i == 0 { &[0x00] } else { &[0x81, 0x70] };
+        trk.extend_from_slice(delta);
+        trk.extend_from_slice(&[0x90, n, 100, 0x81, 0x70, 0x80, n, 0]);
+    }
+    trk.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
+    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
+    smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
+    smf.extend_from_slice(&trk);
+    smf
+}
+
+/// A clock whose waits deliver the video's frames falling inside them, each at its time
+/// (µs after the score's start: the video's time 0 is the score's, as `orch conduct` does).
+struct Filmed<F: FnMut(usize, u64, &Control)> {
+    inner: VirtualClock,
+    frames: Vec<u64>,
+    next: usize,
+    start: Option<u64>,
+    control: Arc<Control>,
+    apply: F,
+}
+
+impl<F: FnMut(usize, u64, &Control)> Clock for Filmed<F> {
+    fn now_us(&self) -> u64 {
+        self.inner.now_us()
+    }
+
+    fn wait_until(&mut self, deadline_us: u64) -> u64 {
+        if self.start.is_none() {
+            self.start = self.control.time_map().map(|m| m.wall(0).max(0) as u64);
+        }
+        if let Some(s) = self.start {
+            while let Some(&t) = self.frames.get(self.next) {
+                if s + t > deadline_us {
+                    break;
+                }
+                self.inner.advance_to(s + t);
+                (self.apply)(self.next, s + t, &self.control);
+                self.next += 1;
+            }
+        }
+        self.inner.wait_until(deadline_us)
+    }
+
+    fn lateness(&self) -> Lateness {
+        self.inner.lateness()
+    }
+}
+
+struct Followed {
+    /// Per beat found: the true tempo there, the tempo the performance was asked to play
+    /// (the factor times the score's 90 BPM), the position's distance from the nearest quarter.
+    beats: Vec<(f64, f64, f64)>,
+    /// From each ictus to the wall time its tempo change took effect in the performer, ms.
+    latency_ms: Vec<f64>,
+}
+
+fn conduct_with_video(video: &Video, follow: Follow, poll_us: Option<u64>) -> Followed {
+    let song = Song::parse(&quarters_smf(24, 90.0)).unwrap();
+    let setup = orch::play::setup(&orch::robot::Robot::thesis(), true, Tempo::NORMAL);
+    let control = Control::new();
+    if let Some(us) = poll_us {
+        control.poll_every(us);
+    }
+    let beats = ScoreBeats::of(&song);
+    let mut follower = Follower::new(beats.clone(), follow);
+    let mut baton = Baton::default();
+    let frame_ms = 1000.0 / video.script.fps;
+    let frames: Vec<u64> = (0..video.frame_count())
+        .map(|i| (i as f64 * frame_ms * 1000.0).round() as u64)
+        .collect();
+    let mut out = Followed {
+        beats: Vec::new(),
+        latency_ms: Vec::new(),
+    };
+    // A change asked and not yet seen taking effect: (the ictus, when asked).
+    let mut waiting: Option<(u64, u64)> = None;
+    let mut clock = Filmed {
+        inner: VirtualClock::new(),
+        frames,
+        next: 0,
+        start: None,
+        control: Arc::clone(&control),
+        apply: |i: usize, t: u64, c: &Control| {
+            let map = c.time_map().unwrap();
+            if let Some((ictus, asked)) = waiting {
+                let (anchor, _) = map.anchor();
+                if anchor >= asked as i64 {
+                    out.latency_ms.push((anchor - ictus as i64) as f64 / 1000.0);
+                    waiting = None;
+                }
+            }
+            let (t_ms, frame) = video.frame_at(i);
+            let Some(b) = baton.push(t_ms, &frame) else {
+                return;
+            };
+            let start = t - (t_ms * 1000.0).round() as u64;
+            let ictus = start + (b.t_ms * 1000.0).round() as u64;
+            let cue = Cue::Beat {
+                t_us: ictus,
+                bpm: b.bpm,
+            };
+            let (pos, _) = beats.at(map.score(ictus as i64));
+            if let Action::Tempo(tempo) = follower.cue(&cue, Some(&map)) {
+                c.set_tempo(tempo);
+                waiting = Some((ictus, t));
+                let truth = video
+                    .truth
+                    .iter()
+                    .min_by(|x, y| (x.t_ms - b.t_ms).abs().total_cmp(&(y.t_ms - b.t_ms).abs()))
+                    .unwrap()
+                    .bpm;
+                out.beats
+                    .push((truth, tempo.get() * 90.0, (pos - pos.round()).abs()));
+            }
+        },
+    };
+    let mut live = |_: &orch_perform::Live| {};
+    let played = perform::<_, MidiRecording>(
+        &setup,
+        song_events(&song),
+        song.notes(),
+        None,
+        &mut clock,
+        Some(&control),
+        Some(&mut live),
+    )
+    .unwrap();
+    let r = played.report(None);
+    assert!(r.adds_up(), "{r:?}");
+    assert_eq!(r.strikes, 24, "every note once: {r:?}");
+    assert_eq!(r.outcomes.dropped.total(), 0);
+    drop(clock);
+    out
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+#[test]
+fn a_baton_video_conducts_the_piece_and_the_tempo_follows_it() {
+    // The piece is written at 90 BPM; the conductor goes from 90 to 130 over 20 beats.
+    let video = Video::new(Script::ramp("accelerando 90-130", 90.0, 130.0, 30.0).beats(20));
+    let imm = conduct_with_video(&video, Follow::Immediate, None);
+    assert!(imm.beats.len() >= 18, "{}", imm.beats.len());
+    // From the fourth beat on (the tracker needs a few intervals to trust a tempo), the
+    // performance is asked the video's tempo, within 3 BPM.
+    for &(truth, asked, _) in &imm.beats[3..] {
+        assert!((truth - asked).abs() < 3.0, "{:?}", imm.beats);
+    }
+    // Phase-following, the performer looking at its control every 5 ms (as `orch conduct`).
+    let ph = conduct_with_video(&video, Follow::PHASE, Some(5_000));
+    // Phase-following: at the last beats the conductor's ictus falls on a quarter of the score.
+    let last: Vec<f64> = ph.beats.iter().rev().take(4).map(|b| b.2).collect();
+    assert!(last.iter().all(|&e| e < 0.05), "{:?}", ph.beats);
+    let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    let (lat40, lat5) = (&imm.latency_ms, &ph.latency_ms);
+    println!(
+        "ictus in the video -> tempo change in the performer (30 fps, virtual clock): \
+         performer waking every 40 ms: median {:.1} ms, max {:.1} ms; every 5 ms (orch \
+         conduct): median {:.1} ms, max {:.1} ms; over {} beats. Phase error at the last 4 \
+         beats (immediate / phase): {:.3} / {:.3} beats",
+        median(lat40),
+        max(lat40),
+        median(lat5),
+        max(lat5),
+        lat5.len(),
+        max(&imm
+            .beats
+            .iter()
+            .rev()
+            .take(4)
+            .map(|b| b.2)
+            .collect::<Vec<_>>()),
+        max(&last),
+    );
+    // The tracker confirms a beat two frames after its bottom sample, which is up to a frame
+    // after the ictus (100 ms at 30 fps), then the performer's next wake.
+    let frames = 3.0 * 1000.0 / 30.0;
+    assert!(max(lat40) <= frames + 40.0 + 1.0, "{lat40:?}");
+    assert!(max(lat5) <= frames + 5.0 + 1.0, "{lat5:?}");
+}
+
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("orch-conduct-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// The report says every note was struck.
+fn all_struck(stdout: &[u8], notes: u64) {
+    let v: serde_json::Value = serde_json::from_slice(stdout).unwrap();
+    assert_eq!(v["strikes"].as_u64(), Some(notes), "{v}");
+}
+
+#[test]
+fn midi_clock_on_stdin_sets_the_tempo() {
+    // Eight quarters written at 60 BPM (8 s); the clock runs at 120: about 4 s.
+    let file = scratch("clock.mid");
+    std::fs::write(&file, quarters_smf(8, 60.0)).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_orch"))
+        .args([
+            "conduct",
+            file.to_str().unwrap(),
+            "--source",
+            "midi-clock:-",
+        ])
+        .args(["--no-view", "--json", "--follow", "immediate"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let t0 = Instant::now();
+    std::thread::spawn(move || {
+        let _ = stdin.write_all(&[0xFA]);
+        // 24 clocks a quarter at 120 BPM: one every 20 833 µs, for up to 10 s.
+        for i in 0..(10 * 48) {
+            let due = t0 + Duration::from_micros(i * 500_000 / 24);
+            std::thread::sleep(due.saturating_duration_since(Instant::now()));
+            if stdin
+                .write_all(&[0xF8])
+                .and_then(|()| stdin.flush())
+                .is_err()
+            {
+                break;
+            }
+        }
+    });
+    let out = child.wait_with_output().unwrap();
+    let s = t0.elapsed().as_secs_f64();
+    assert!(out.status.success(), "{out:?}");
+    all_struck(&out.stdout, 8);
+    // Written 8 s; at the clock's 120 BPM, 4 s and the start.
+    assert!((3.6..6.0).contains(&s), "{s} s");
+}
+
+#[test]
+fn osc_tempo_over_udp_sets_the_tempo() {
+    let file = scratch("osc.mid");
+    std::fs::write(&file, quarters_smf(8, 60.0)).unwrap();
+    let port = std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let t0 = Instant::now();
+    let child = Command::new(env!("CARGO_BIN_EXE_orch"))
+        .args(["conduct", file.to_str().unwrap(), "--source"])
+        .arg(format!("osc:{port}"))
+        .args(["--no-view", "--json"])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let tx = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let packet = orch_perform::conduct::encode_osc(
+        "/orch/tempo",
+        &[orch_perform::conduct::OscArg::Float(240.0)],
+    );
+    tx.send_to(&packet, ("127.0.0.1", port)).unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let s = t0.elapsed().as_secs_f64();
+    all_struck(&out.stdout, 8);
+    // 8 s as written; 4 times as fast after 0.3 s: about 2.2 s.
+    assert!((1.5..4.0).contains(&s), "{s} s");
+}
+
+#[test]
+fn bad_sources_exit_2() {
+    let file = scratch("bad.mid");
+    std::fs::write(&file, quarters_smf(2, 60.0)).unwrap();
+    for source in ["nothing", "osc:notaport", "baton:/nonexistent.y4m", "tap"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_orch"))
+            .args([
+                "conduct",
+                file.to_str().unwrap(),
+                "--source",
+                source,
+                "--no-view",
+            ])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{source}: {out:?}");
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains("--source"),
+            "{source}: {out:?}"
+        );
+    }
+}
