@@ -98,7 +98,13 @@ impl Setup {
                 .map(|d| d.as_micros() as u64),
             overlap: c.overlap,
             compensation: self.compensation,
-            bus_margin_us: self.sim.boards.len() as u64 * self.write_us(),
+            // The bus's queue; on a DIN line also half a burst, since a press can arrive that
+            // much earlier than planned and find its key resting longer.
+            bus_margin_us: self.sim.boards.len() as u64 * self.write_us()
+                + match self.link {
+                    Link::Direct => 0,
+                    Link::Din => DIN_BURST_US / 2,
+                },
             extra_lookahead_us: match self.link {
                 Link::Direct => 0,
                 Link::Din => DIN_BURST_US,

@@ -215,6 +215,10 @@ pub struct Planner<S: Iterator<Item = ScoreEvent>> {
     keys: Vec<KeyModel>,
     /// Per note number: the channels on which it is on (the interpreter's record, mirrored).
     on: [u16; 128],
+    /// Per (channel, note): when its latest Note-On was sent. Its Note-Off never goes sooner
+    /// than the key's shortest sounding press after it, whatever the model says of it, so a
+    /// note the robot strikes where the model expected a join or a drop still sounds.
+    on_sent: Vec<i64>,
     /// Per channel: the latest send of a mapped note message, and the last channel-wide
     /// controller still movable (its queue key and its lower bound).
     channel_last: [Option<i64>; 16],
@@ -245,6 +249,7 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
             seq: 0,
             keys: vec![KeyModel::default(); keys],
             on: [0; 128],
+            on_sent: vec![i64::MIN; 16 * 128],
             channel_last: [None; 16],
             channel_cc: [None; 16],
             next_note: 0,
@@ -424,6 +429,9 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
     }
 
     fn send(&mut self, at: i64, bytes: WireBytes, note: Option<NoteId>, score_at: i64) -> QueueKey {
+        if let Some((ch, n, _)) = bytes.note_on() {
+            self.on_sent[usize::from(ch) * 128 + usize::from(n)] = at;
+        }
         self.push(Planned::Send {
             at_us: at,
             bytes,
@@ -686,7 +694,9 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         };
         let k = usize::from(land.key);
         let lead = self.rules.release_lead_us.get(k).copied().unwrap_or(0) as i64;
-        let r_des = w - lead;
+        let min_hold_k = self.rules.min_hold_us.get(k).copied().unwrap_or(0) as i64;
+        let own_on = self.on_sent[usize::from(ch) * 128 + usize::from(n)];
+        let r_des = (w - lead).max(own_on.saturating_add(min_hold_k));
         let last = self.keys[k].last_send.unwrap_or(i64::MIN);
         let was_on = self.on[usize::from(n)] & (1 << ch) != 0;
         self.on[usize::from(n)] &= !(1 << ch);
