@@ -1,10 +1,10 @@
 //! # orch-perform: the performer
 //!
 //! One streaming pipeline from a score to a robot, with an honest account of every note.
-//! Every front end (`orch play`, `orch analyze`, later a daemon or the conductor) uses it.
+//! Every front end that plays a score (`orch play`, `orch analyze`, `orch conduct`; later a
+//! daemon or a web page) uses it.
 //!
-//! - **Source**: score events in order ([`ScoreEvent`]), from a song ([`song_events`]) or,
-//!   later, live MIDI.
+//! - **Source**: score events in order ([`ScoreEvent`]), from a song ([`song_events`]).
 //! - **Planner** ([`Planner`], [`plan`]): plans in score time with a bounded lookahead;
 //!   sends each key's press early by its mechanical delay and each release early where a
 //!   re-strike needs its rest; reasons about notes, not only keys; the tempo can change at
