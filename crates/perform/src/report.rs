@@ -173,8 +173,8 @@ pub struct Report {
     pub folded: u64,
     /// Folded notes by octaves moved (+ up, − down).
     pub folded_by_octaves: BTreeMap<i8, u64>,
-    /// Re-strikes the interpreter held back for their key's rest (each then struck late, or
-    /// was cancelled or stopped).
+    /// Re-strikes the interpreter held back for their key's rest that then struck, late
+    /// (those whose wait was cancelled or stopped are counted under `outcomes.dropped`).
     pub restrikes_delayed: u64,
     /// What the planner changed.
     pub planning: Planning,
@@ -273,7 +273,7 @@ impl Report {
         ));
         let p = &self.planning;
         line(format!(
-            "re-strikes             {} waited for the key's rest; {} releases moved early, {} added",
+            "re-strikes             {} struck late after waiting for the key's rest; {} releases moved early, {} added",
             self.restrikes_delayed, p.releases_moved_early, p.early_releases_added
         ));
         line(format!(

@@ -375,6 +375,40 @@ impl ErrorType for VirtualBus {
     type Error = BusError;
 }
 
+impl VirtualBus {
+    /// After a transaction with device `index` over `span`: logs its write frames (if the log
+    /// is kept) and the pin change, if its outputs changed from `before`.
+    fn record(
+        &mut self,
+        index: usize,
+        (start, end): (SimTime, SimTime),
+        before: u16,
+        writes: impl IntoIterator<Item = Vec<u8>>,
+    ) {
+        let address = self.devices[index].address();
+        let after = self.devices[index].driven();
+        if self.keep_log {
+            for bytes in writes {
+                self.log.push(BusWrite {
+                    start,
+                    end,
+                    address,
+                    bytes,
+                    driven: after,
+                });
+            }
+        }
+        if before != after {
+            self.changes.push(PinChange {
+                time: end,
+                address,
+                before,
+                after,
+            });
+        }
+    }
+}
+
 /// A run of adjacent operations of one kind: one frame on the wire.
 fn frames(operations: &[Operation<'_>]) -> Vec<(bool, core::ops::Range<usize>)> {
     let mut out: Vec<(bool, core::ops::Range<usize>)> = Vec::new();
@@ -421,24 +455,9 @@ impl I2c<SevenBitAddress> for VirtualBus {
                 self.occupy(Self::bits_for_frames(&[data.len()]), 1 + data.len() as u64);
             let before = self.devices[index].driven();
             self.devices[index].write_frame(data);
-            let after = self.devices[index].driven();
-            if self.keep_log {
-                self.log.push(BusWrite {
-                    start,
-                    end,
-                    address,
-                    bytes: data.to_vec(),
-                    driven: after,
-                });
-            }
-            if before != after {
-                self.changes.push(PinChange {
-                    time: end,
-                    address,
-                    before,
-                    after,
-                });
-            }
+            // The bytes are copied only when the log keeps them.
+            let logged = self.keep_log.then(|| data.to_vec());
+            self.record(index, (start, end), before, logged);
             return Ok(());
         }
         let groups = frames(operations);
@@ -477,27 +496,7 @@ impl I2c<SevenBitAddress> for VirtualBus {
                 writes.push(data);
             }
         }
-        let after = self.devices[index].driven();
-        for bytes in writes {
-            if !self.keep_log {
-                continue;
-            }
-            self.log.push(BusWrite {
-                start,
-                end,
-                address,
-                bytes,
-                driven: after,
-            });
-        }
-        if before != after {
-            self.changes.push(PinChange {
-                time: end,
-                address,
-                before,
-                after,
-            });
-        }
+        self.record(index, (start, end), before, writes);
         Ok(())
     }
 }
