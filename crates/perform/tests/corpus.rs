@@ -2,15 +2,13 @@
 //! adds up, every struck note found its sound, compensation lands notes on time, and the
 //! streaming planner equals planning the whole song first.
 
-use std::path::PathBuf;
+use orch_perform::{song_events, Link, Planner, Played, Setup, Tempo};
+use orch_seq::Song;
 
-use orch_perform::{
-    perform, song_events, thesis_config, Link, MidiRecording, Planner, Played, Setup, Tempo,
-};
-use orch_seq::{Song, VirtualClock};
+mod common;
 
 fn corpus() -> Vec<(String, Song)> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/midi");
+    let dir = common::shared_midi();
     let manifest = std::fs::read_to_string(dir.join("MANIFEST.tsv"))
         .expect("the shared MIDI corpus (../shared/midi) is beside the checkout");
     let mut out = Vec::new();
@@ -29,28 +27,13 @@ fn corpus() -> Vec<(String, Song)> {
 
 fn setup(compensation: bool, link: Link) -> Setup {
     Setup {
-        config: thesis_config(),
-        sim: orch_sim::SimConfig {
-            clock: orch_sim::BusClock::FAST,
-            ..orch_sim::SimConfig::thesis()
-        },
         compensation,
-        tempo: Tempo::NORMAL,
-        link,
+        ..common::setup(link)
     }
 }
 
 fn play(setup: &Setup, song: &Song) -> Played {
-    perform::<_, MidiRecording>(
-        setup,
-        song_events(song),
-        song.notes(),
-        None,
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap()
+    common::render(setup, song_events(song), song.notes())
 }
 
 #[test]

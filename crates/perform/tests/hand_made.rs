@@ -1,10 +1,8 @@
 //! Hand-made songs with known outcomes: each asserts the exact counts.
 
 use orch_core::{Config, GuardConfig, Overlap};
-use orch_perform::{
-    perform, thesis_config, Link, MidiRecording, Outcome, Played, ScoreEvent, Setup, Tempo,
-};
-use orch_seq::{VirtualClock, WireBytes};
+use orch_perform::{thesis_config, Link, Outcome, Played, ScoreEvent, Setup};
+use orch_seq::WireBytes;
 
 /// (ms, bytes) → score events.
 fn song(events: &[(u64, &[u8])]) -> (Vec<ScoreEvent>, usize) {
@@ -20,31 +18,15 @@ fn song(events: &[(u64, &[u8])]) -> (Vec<ScoreEvent>, usize) {
     (v, notes)
 }
 
+mod common;
+
 fn setup(config: Config<16>) -> Setup {
-    Setup {
-        config,
-        sim: orch_sim::SimConfig {
-            clock: orch_sim::BusClock::FAST,
-            ..orch_sim::SimConfig::thesis()
-        },
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    }
+    common::setup_with(config, Link::Direct)
 }
 
 fn play(setup: &Setup, events: &[(u64, &[u8])]) -> Played {
     let (events, notes) = song(events);
-    perform::<_, MidiRecording>(
-        setup,
-        events.into_iter(),
-        notes,
-        None,
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap()
+    common::render(setup, events.into_iter(), notes)
 }
 
 fn overlap(o: Overlap) -> Config<16> {

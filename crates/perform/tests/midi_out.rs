@@ -2,32 +2,15 @@
 //! robot as its copy at the far end; and the bytes read back the way a serial port returns
 //! them, in chunks that cut messages, give the same performance.
 
-use std::path::PathBuf;
-
 use orch_core::NoteEvent;
 use orch_perform::{
-    perform, sim_boards, song_events, thesis_config, DinWire, Link, LocalRobot, MidiRecording,
-    ScoreEvent, Setup, Tempo,
+    perform, sim_boards, song_events, DinWire, Link, LocalRobot, MidiRecording, ScoreEvent,
 };
-use orch_seq::{Song, VirtualClock, WireBytes};
+use orch_seq::{VirtualClock, WireBytes};
 
-fn setup(link: Link) -> Setup {
-    Setup {
-        config: thesis_config(),
-        sim: orch_sim::SimConfig {
-            clock: orch_sim::BusClock::FAST,
-            ..orch_sim::SimConfig::thesis()
-        },
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link,
-    }
-}
+mod common;
 
-fn corpus(file: &str) -> Song {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/midi");
-    Song::parse(&std::fs::read(dir.join(file)).unwrap()).unwrap()
-}
+use common::{corpus_song as corpus, setup};
 
 #[test]
 fn a_din_line_carries_every_note_with_running_status_and_compensation_counts_its_time() {

@@ -45,21 +45,18 @@ fn notes() -> impl Strategy<Value = Vec<(u16, u8, u8, u16)>> {
     )
 }
 
+mod common;
+
 fn setup(overlap: Overlap, link: Link) -> Setup {
-    Setup {
-        config: Config {
+    let mut s = common::setup_with(
+        Config {
             overlap,
             ..thesis_config()
         },
-        sim: orch_sim::SimConfig {
-            clock: orch_sim::BusClock::FAST,
-            keep: orch_sim::Keep::Presses,
-            ..orch_sim::SimConfig::thesis()
-        },
-        compensation: true,
-        tempo: Tempo::NORMAL,
         link,
-    }
+    );
+    s.sim.keep = orch_sim::Keep::Presses;
+    s
 }
 
 proptest! {
