@@ -6,7 +6,9 @@
 # builds the firmware ELF at
 #     firmware/atmega16/target/avr-none/release/orch-atmega16.elf
 # prints its size, then builds and runs firmware/atmega16-hil (avr-tester, which builds
-# simavr from source). Extra arguments go to the test binary, e.g. `firmware/test.sh figures`.
+# simavr from source), among them the thesis's whole chain (`orch play` into a pty, bridged into
+# simavr: it builds the root workspace's `orch` first). Extra arguments go to the test binary,
+# e.g. `firmware/test.sh figures`.
 set -euo pipefail
 # The firmware packages build in their own target folders (the ELF path below), whatever the
 # caller's CARGO_TARGET_DIR says.
@@ -33,6 +35,10 @@ echo "== $pico"
 size_tool="$(command -v llvm-size || command -v arm-none-eabi-size || true)"
 [ -z "$size_tool" ] || "$size_tool" "$pico"
 
+echo "== the orch command, for the thesis's whole chain (tests/chain.rs: orch play -> pty -> simavr)"
+(cd "$here/.." && cargo build --locked -p orch)
+orch_bin="$here/../target/debug/orch"
+
 echo "== hardware-in-the-loop tests (simavr via avr-tester)"
 cd "$here/atmega16-hil"
-ORCH_ATMEGA16_ELF="$elf" timeout 900 cargo test --locked -- --nocapture "$@"
+ORCH_ATMEGA16_ELF="$elf" ORCH_BIN="$orch_bin" timeout 900 cargo test --locked -- --nocapture "$@"

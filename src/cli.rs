@@ -107,6 +107,12 @@ pub struct PlayArgs {
     /// warnings (a device or a board lost, and back).
     #[arg(long)]
     pub verbose: bool,
+    /// Write every board write of every robot to FILE, one JSON object a line:
+    /// {"out":OUT,"t_us":T,"address":A,"outputs":O}; `t_us` is when the write completed on the
+    /// performance's clock, `outputs` the 16 pins the board drives after it. For a MIDI output
+    /// these are its virtual copy's writes, at the far end of the line.
+    #[arg(long, value_name = "FILE")]
+    pub writes: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]

@@ -7,6 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use anyhow::Context;
 use orch_io::{Channels, OutSpec, OutStats, Output, Target};
 use orch_perform::{
     perform, realtime, song_events, Control, Link, Live, MidiRecording, Outcome, Played, Report,
@@ -99,7 +100,18 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
     init_logging(args.verbose);
     let song = load_song(&args.file)?;
     let robot = load_robot(args.robot.as_deref())?;
-    let setup = setup(&robot, !args.no_compensation, tempo(args.tempo)?);
+    let mut setup = setup(&robot, !args.no_compensation, tempo(args.tempo)?);
+    if args.writes.is_some() {
+        // Every write is kept for the file, not only the presses the report needs.
+        setup.sim.keep = orch_sim::Keep::Everything;
+    }
+    let writes = match &args.writes {
+        Some(path) => Some(std::io::BufWriter::new(
+            std::fs::File::create(path)
+                .map_err(|e| bad_input(format!("--writes {}: {e}", path.display())))?,
+        )),
+        None => None,
+    };
     let specs = out_specs(&args.outs)?;
     if args.fast {
         if let Some(s) = specs.iter().find(|s| s.target != Target::Sim) {
@@ -136,8 +148,32 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
         };
         play_live(song, lanes, live)?
     };
+    if let (Some(mut file), Some(path)) = (writes, &args.writes) {
+        write_board_writes(&mut file, &played)
+            .with_context(|| format!("--writes {}", path.display()))?;
+    }
     // The comparison without compensation is `orch analyze`'s: a play renders once.
     print_reports(&played, args.json, &args.file, !args.outs.is_empty())
+}
+
+/// `--writes`: every robot's board writes, one JSON object a line, robot after robot.
+fn write_board_writes(
+    file: &mut impl Write,
+    played: &[(OutSpec, Played, Option<OutStats>)],
+) -> anyhow::Result<()> {
+    for (spec, p, _) in played {
+        for w in &p.performance.writes {
+            let line = serde_json::json!({
+                "out": spec.text,
+                "t_us": w.end.as_micros(),
+                "address": w.address,
+                "outputs": w.driven,
+            });
+            writeln!(file, "{line}")?;
+        }
+    }
+    file.flush()?;
+    Ok(())
 }
 
 /// Opens every output: one robot (a lane) each.

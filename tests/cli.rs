@@ -509,6 +509,59 @@ fn play_fast_json_report_adds_up() {
 }
 
 #[test]
+fn play_writes_lists_every_board_write_of_the_performance() {
+    let path = std::env::temp_dir().join(format!("orch-writes-{}.jsonl", std::process::id()));
+    let play = |writes: Option<&std::path::Path>| {
+        let mut cmd = orch();
+        cmd.args(["play", "--fast", "--json"])
+            .arg(corpus("m21-k525short.mid"));
+        if let Some(w) = writes {
+            cmd.arg("--writes").arg(w);
+        }
+        let out = cmd.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice::<Value>(&out.stdout).unwrap()
+    };
+    let with = play(Some(&path));
+    // Keeping every write for the file changes nothing of the performance.
+    assert_eq!(with, play(None));
+    let lines = json_lines(&std::fs::read(&path).unwrap());
+    assert_eq!(lines.len() as u64, with["bus"]["writes"].as_u64().unwrap());
+    let mut outputs = [0u16; 4];
+    let (mut presses, mut last_t) = (0u64, 0u64);
+    for l in &lines {
+        assert_eq!(l["out"], "sim");
+        let t = l["t_us"].as_u64().unwrap();
+        assert!(t >= last_t, "writes in time order");
+        last_t = t;
+        let board = (l["address"].as_u64().unwrap() - 0x21) as usize;
+        let now = l["outputs"].as_u64().unwrap() as u16;
+        presses += u64::from((now & !outputs[board]).count_ones());
+        outputs[board] = now;
+    }
+    // Every strike is a press on a board; a press may also fail to sound.
+    let strikes = with["strikes"].as_u64().unwrap();
+    assert!(
+        presses >= strikes && strikes > 150,
+        "{presses} presses, {strikes} strikes"
+    );
+    assert_eq!(outputs, [0; 4], "every key up at the end");
+    // A file that cannot be written is bad input, before anything plays.
+    let out = orch()
+        .args(["play", "--fast", "--writes", "/nonexistent/dir/w.jsonl"])
+        .arg(corpus("m21-k525short.mid"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--writes /nonexistent/dir/w.jsonl"));
+    std::fs::remove_file(&path).ok();
+}
+
+#[test]
 fn analyze_says_what_will_go_wrong() {
     let out = orch()
         .arg("analyze")
