@@ -147,7 +147,9 @@ pub struct BatonArgs {
 pub struct RunArgs {
     /// Where the MIDI bytes come from: serial:DEVICE (a DIN line, 31250 baud),
     /// rawmidi:DEVICE (or any file or FIFO), udp:PORT (datagrams on loopback), udp:HOST:PORT,
-    /// or - (standard input).
+    /// a dash for standard input, or (built with the `alsa` feature) alsa: (a sequencer port
+    /// of orch's own to connect to) or alsa:CLIENT:PORT (that source, subscribed). A serial
+    /// or raw MIDI device that goes away is opened again when it comes back.
     #[arg(long = "in", value_name = "IN")]
     pub input: String,
     /// The robot: sim (the virtual robot) or i2c:DEVICE (PCA9555 finger boards).

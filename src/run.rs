@@ -143,6 +143,15 @@ impl Framer {
         (0x80..=0xEF).contains(&self.status).then_some(self.status)
     }
 
+    /// Forgets a message half received (the input's device went away); the running status
+    /// last sent on stays, as the receiver keeps it.
+    pub fn forget(&mut self) {
+        self.status = 0;
+        self.have = 0;
+        self.in_sysex = false;
+        self.sysex.clear();
+    }
+
     /// Whether no message is half received.
     pub fn idle(&self) -> bool {
         self.have == 0 && !self.in_sysex
@@ -272,6 +281,17 @@ impl Thru {
         });
     }
 
+    /// The input went away: a message half received is forgotten, and All Notes Off goes out
+    /// on this output's channels.
+    fn line_lost(&mut self) {
+        self.framer.forget();
+        for m in all_notes_off().chunks(3) {
+            if self.spec.channels.passes(m) {
+                let _ = self.tx.send(Some(m.to_vec()));
+            }
+        }
+    }
+
     /// All Notes Off on every channel, then the output is closed.
     fn stop(self) -> anyhow::Result<()> {
         let _ = self.tx.send(None);
@@ -396,6 +416,12 @@ struct Runner {
     robot_path: Option<std::path::PathBuf>,
     /// The input is a DIN line: a read's bytes arrived 320 µs apart.
     din: bool,
+    /// The input's name, for messages.
+    input_name: String,
+    /// Times the input's device went away.
+    lost: u64,
+    /// Messages cut off by the device going away.
+    cut_by_loss: u64,
 }
 
 /// One byte on a DIN MIDI line: 10 bits at 31 250 baud.
@@ -551,7 +577,8 @@ impl Runner {
         format!(
             "orch run: {} bytes in {} reads; {} messages; garbage: {} data bytes with no \
              status, {} messages cut short; {} notes: {} sounded, {} dropped; {} keys cut by \
-             the watchdog; {} board writes; {} keys down",
+             the watchdog; {} board writes; {} keys down; the input's device went away {} times \
+             ({} messages cut off)",
             c.bytes,
             self.reads,
             c.messages,
@@ -562,7 +589,9 @@ impl Runner {
             t.dropped,
             t.cut_by_watchdog,
             self.tap.writes,
-            self.interp.keys_down()
+            self.interp.keys_down(),
+            self.lost,
+            self.cut_by_loss
         )
     }
 
@@ -581,6 +610,24 @@ impl Runner {
     }
 
     /// Every key released on every output.
+    /// The input's device went away: a message it cut off is forgotten (the next connection
+    /// starts afresh, no running status), every key is released, and the thru outputs get
+    /// All Notes Off on their channels (what was held there has lost its Note-Offs too).
+    fn line_lost(&mut self) -> anyhow::Result<()> {
+        self.lost += 1;
+        if self.interp.input_ended() {
+            self.cut_by_loss += 1;
+        }
+        self.framer = Framer::default();
+        for t in &mut self.thru {
+            t.line_lost();
+        }
+        let t = self.now_us();
+        self.timers(t)?;
+        self.interp.all_off(Instant::from_micros(t));
+        self.flush(t, None)
+    }
+
     fn stop(&mut self) -> anyhow::Result<()> {
         let t = self.now_us();
         self.timers(t)?;
@@ -652,6 +699,9 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         pending: None,
         robot_path: args.robot.clone(),
         din: matches!(input, InTarget::Serial(_)),
+        input_name: args.input.clone(),
+        lost: 0,
+        cut_by_loss: 0,
     };
     let priority = orch_perform::realtime::raise_priority();
     tracing::debug!(?priority, "the robot's loop");
@@ -730,6 +780,19 @@ fn main_loop(
                 r.bytes(at, &bytes)
             }
             Ok(Event::In(InEvent::End)) => return End::Input,
+            Ok(Event::In(InEvent::Lost(e))) => {
+                eprintln!(
+                    "orch: --in {}: the device went away ({e}); every key released; it is \
+                     tried again every {} ms",
+                    r.input_name,
+                    orch_io::RECONNECT_EVERY.as_millis()
+                );
+                r.line_lost()
+            }
+            Ok(Event::In(InEvent::Back)) => {
+                eprintln!("orch: --in {}: the device is back", r.input_name);
+                Ok(())
+            }
             Ok(Event::In(InEvent::Failed(e))) => {
                 return End::Failed(anyhow::Error::new(e).context("reading the input"))
             }

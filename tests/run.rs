@@ -339,7 +339,9 @@ fn serial_pty_at_wire_pace_gives_what_interpret_gives() {
     wait_ready(&ready, &stderr);
     let sent = paced(&mut master, &bytes, WIRE_BYTE);
     std::thread::sleep(Duration::from_millis(300));
-    drop(master); // the line hangs up: the end of the input
+    drop(master); // the line hangs up: orch releases every key and waits for it to return
+    wait_for("went away", &stderr);
+    signal(&child, nix::sys::signal::Signal::SIGTERM);
     let status = wait_exit(&mut child, Duration::from_secs(10));
     reader.join().unwrap();
     let err = stderr.lock().unwrap().clone();
@@ -369,6 +371,94 @@ fn serial_pty_at_wire_pace_gives_what_interpret_gives() {
         bytes.len(),
         run.len()
     );
+}
+
+/// A serial device that goes away (a USB adapter unplugged: here the pty's master closed)
+/// with a key down and a message half sent: every key is released at once, the cut message is
+/// forgotten, and when the device comes back at the same path (a symlink, as
+/// `/dev/serial/by-id/…` is) orch reads it again, from a clean start.
+#[test]
+fn a_serial_device_that_goes_away_releases_every_key_and_is_read_again_when_it_returns() {
+    let link = std::env::temp_dir().join(format!("orch-run-serial-link-{}", std::process::id()));
+    let _ = std::fs::remove_file(&link);
+    let (mut first, path) = pty_pair();
+    std::os::unix::fs::symlink(&path, &link).unwrap();
+    let mut child = run_orch(
+        &[
+            "--in",
+            &format!("serial:{}", link.display()),
+            "--json",
+            "--verbose",
+        ],
+        Stdio::null(),
+    );
+    let (lines, reader) = collect_lines(child.stdout.take().unwrap());
+    let (stderr, ready) = collect_stderr(&mut child);
+    wait_ready(&ready, &stderr);
+    let count = || lines.lock().unwrap().len();
+    let wait_lines = |n: usize| {
+        let t0 = Instant::now();
+        while count() < n {
+            assert!(t0.elapsed() < Duration::from_secs(10), "{} lines", count());
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    };
+    // C4 and E4 down (board 0x22 bits 8 and 12), then a Note-On cut after its key.
+    first
+        .write_all(&[0x90, 60, 100, 64, 100, 0x90, 67])
+        .unwrap();
+    wait_lines(2);
+    drop(first);
+    wait_for("went away", &stderr);
+    wait_lines(3);
+    let released = lines.lock().unwrap()[2].1.clone();
+    assert_eq!(
+        (released["address"].as_u64(), released["outputs"].as_u64()),
+        (Some(0x22), Some(0)),
+        "{released}"
+    );
+    assert!(
+        released["byte"].is_null(),
+        "released by no byte: {released}"
+    );
+
+    // The device comes back at the same path.
+    let (mut second, path) = pty_pair();
+    std::fs::remove_file(&link).unwrap();
+    std::os::unix::fs::symlink(&path, &link).unwrap();
+    wait_for("is back", &stderr);
+    // Data bytes with no status first: neither the rest of the cut message nor a note under
+    // the old running status. Then G4 as a whole message.
+    second.write_all(&[100, 72, 100]).unwrap();
+    second.write_all(&[0x90, 67, 100]).unwrap();
+    wait_lines(4);
+    std::thread::sleep(Duration::from_millis(50));
+    signal(&child, nix::sys::signal::Signal::SIGUSR1);
+    wait_for("went away 1 times (1 messages cut off)", &stderr);
+    signal(&child, nix::sys::signal::Signal::SIGTERM);
+    let status = wait_exit(&mut child, Duration::from_secs(5));
+    reader.join().unwrap();
+    let err = stderr.lock().unwrap().clone();
+    assert!(status.success(), "{err}");
+    let v: Vec<Value> = lines.lock().unwrap().iter().map(|l| l.1.clone()).collect();
+    let (ws, fin) = writes(&v);
+    all_released(&fin);
+    let by_bytes: Vec<(u64, u64)> = ws
+        .iter()
+        .filter(|w| w.byte.is_some())
+        .map(|w| (w.address, w.outputs))
+        .collect();
+    // C4, C4+E4, then after the loss only G4 (bit 15 of 0x22): nothing from the stray bytes.
+    assert_eq!(
+        by_bytes,
+        [
+            (0x22, 1 << 8),
+            (0x22, (1 << 8) | (1 << 12)),
+            (0x22, 1 << 15)
+        ],
+        "{ws:?}"
+    );
+    std::fs::remove_file(&link).ok();
 }
 
 /// A chord through UDP, then SIGTERM: every key released (seen in --json) before exit.
@@ -576,6 +666,8 @@ fn bad_input_or_output_exits_2() {
         &["--in", "-", "--thru", "sim"],
         &["--in", "rawmidi:/nonexistent/midi"],
         &["--in", "-", "--thru", "rawmidi:/nonexistent/midi"],
+        #[cfg(not(feature = "alsa"))]
+        &["--in", "alsa:"],
     ] {
         let out = Command::new(ORCH)
             .arg("run")
@@ -585,6 +677,10 @@ fn bad_input_or_output_exits_2() {
             .unwrap();
         assert_eq!(out.status.code(), Some(2), "{args:?}");
         assert!(!out.stderr.is_empty());
+        if args[1] == "alsa:" {
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(err.contains("`alsa` feature"), "{err}");
+        }
     }
 }
 

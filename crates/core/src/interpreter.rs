@@ -367,6 +367,16 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         self.refresh();
     }
 
+    /// Says the input has ended or its line was lost (a port closed, a cable unplugged): a
+    /// message it cut off is forgotten, and the running status with it, so that the bytes of
+    /// a new connection are never joined to it. Returns whether it cut a message off
+    /// ([`Decoder::finish`]). The keys are left as they are: [`all_off`](Self::all_off)
+    /// releases them.
+    #[must_use = "it says whether the end of the input cut a message off"]
+    pub fn input_ended(&mut self) -> bool {
+        self.decoder.finish()
+    }
+
     /// When [`tick`](Self::tick) should next be called: the earliest hold limit, delayed
     /// re-strike, short press or watchdog deadline, or `None` if no timer is running.
     ///
@@ -979,5 +989,21 @@ mod tests {
         assert_eq!(i.stats().dropped_power, 1);
         i.feed_slice(&[0x80, 62, 0, 60, 0], Instant::ZERO);
         assert_eq!(i.keys_down(), 1);
+    }
+
+    #[test]
+    fn a_lost_line_forgets_the_cut_message_and_running_status_but_not_the_keys() {
+        let mut i = Interpreter::<4, 61, NotePool<32>>::new(Config::THESIS).unwrap();
+        // A note, then a second cut off after its key.
+        i.feed_slice(&[0x90, 60, 100, 62], Instant::ZERO);
+        assert!(i.input_ended());
+        assert!(!i.input_ended(), "nothing is pending any more");
+        assert!(i.is_down(24), "the keys are all_off's to release");
+        // The new connection's first bytes are data under no status: not a Note-On with the
+        // old running status, not the rest of the cut message.
+        i.feed_slice(&[64, 100], Instant::from_micros(1_000));
+        assert!(!i.is_down(26) && !i.is_down(28));
+        assert_eq!(i.keys_down(), 1);
+        assert_eq!(i.counters().dropped, 2);
     }
 }

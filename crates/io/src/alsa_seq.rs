@@ -1,5 +1,6 @@
-//! ALSA sequencer ports (`alsa:CLIENT:PORT`), behind the `alsa` feature: the one output that
-//! needs a system library (alsa-lib, `libasound2-dev` to build).
+//! ALSA sequencer ports (`alsa:CLIENT:PORT` outputs, `alsa:` and `alsa:CLIENT:PORT` inputs),
+//! behind the `alsa` feature: the one output and input that need a system library (alsa-lib,
+//! `libasound2-dev` to build). Inputs: [`AlsaIn`].
 //!
 //! orch opens a sequencer client named `orch` with one output port, subscribes the
 //! destination to it, and sends each message as a sequencer event, directly (no queue: the
@@ -116,4 +117,95 @@ pub fn seq_events(
         rest = &rest[used..];
     }
     Ok(())
+}
+
+/// An ALSA sequencer input (`--in alsa:` or `--in alsa:CLIENT:PORT`): a client named `orch`
+/// with one writable port, `orch in`, that any client (a DAW, a keyboard, `aconnect`) can
+/// connect to; given a source, orch subscribes it to that port itself. Each event's MIDI
+/// bytes come out whole, through alsa-lib's own decoder.
+pub struct AlsaIn {
+    seq: Seq,
+    port: i32,
+}
+
+impl AlsaIn {
+    /// Opens the client and its port; with `source`, subscribes it (`CLIENT:PORT` by numbers
+    /// or by the client's name).
+    pub fn open(source: Option<&str>) -> Result<AlsaIn, OutError> {
+        let device = match source {
+            Some(s) => format!("ALSA sequencer port {s}"),
+            None => "the ALSA sequencer".to_string(),
+        };
+        let err = |source: io::Error| OutError::Open {
+            device: device.clone(),
+            source,
+        };
+        let seq =
+            Seq::open(None, Some(alsa::Direction::Capture), false).map_err(|e| err(other(e)))?;
+        let name = CString::new("orch").expect("no NUL");
+        seq.set_client_name(&name).map_err(|e| err(other(e)))?;
+        let mut info = PortInfo::empty().map_err(|e| err(other(e)))?;
+        info.set_capability(PortCap::WRITE | PortCap::SUBS_WRITE);
+        info.set_type(PortType::MIDI_GENERIC | PortType::APPLICATION);
+        info.set_name(&CString::new("orch in").expect("no NUL"));
+        seq.create_port(&info).map_err(|e| err(other(e)))?;
+        let port = info.get_port();
+        if let Some(source) = source {
+            let from = destination(&seq, source)
+                .map_err(|e| err(io::Error::new(io::ErrorKind::NotFound, e)))?;
+            let subs = PortSubscribe::empty().map_err(|e| err(other(e)))?;
+            subs.set_sender(from);
+            subs.set_dest(Addr {
+                client: seq.client_id().map_err(|e| err(other(e)))?,
+                port,
+            });
+            seq.subscribe_port(&subs).map_err(|e| err(other(e)))?;
+        }
+        Ok(AlsaIn { seq, port })
+    }
+
+    /// The port's address, `CLIENT:PORT`, for `aconnect SOURCE CLIENT:PORT`.
+    pub fn address(&self) -> String {
+        let client = self.seq.client_id().unwrap_or(-1);
+        format!("{client}:{}", self.port)
+    }
+
+    /// Waits at most `timeout` for events, and appends the MIDI bytes of every event that
+    /// came to `out` (events that are not MIDI, such as port announcements, add nothing).
+    pub fn read(&self, out: &mut Vec<u8>, timeout: std::time::Duration) -> io::Result<()> {
+        use alsa::poll::Descriptors;
+        let fds = (&self.seq, Some(alsa::Direction::Capture));
+        let mut pollfds = fds.get().map_err(other)?;
+        let ms = timeout.as_millis().min(i32::MAX as u128) as i32;
+        if alsa::poll::poll(&mut pollfds, ms).map_err(other)? == 0 {
+            return Ok(());
+        }
+        let decoder = MidiEvent::new(SYSEX_MAX).map_err(other)?;
+        decoder.enable_running_status(false);
+        let mut input = self.seq.input();
+        while input.event_input_pending(true).map_err(other)? > 0 {
+            let mut event = input.event_input().map_err(other)?;
+            event_bytes(&decoder, &mut event, out);
+        }
+        Ok(())
+    }
+}
+
+/// The longest event decoded: a System Exclusive message longer than this is left out.
+const SYSEX_MAX: u32 = 64 * 1024;
+
+/// Appends a sequencer event's MIDI bytes to `out`, whole (with its status byte), through
+/// alsa-lib's decoder; an event that is not MIDI adds nothing.
+pub fn event_bytes(decoder: &MidiEvent, event: &mut Event<'_>, out: &mut Vec<u8>) {
+    let mut buf = [0u8; 16];
+    match decoder.decode(&mut buf, event) {
+        Ok(n) => out.extend_from_slice(&buf[..n]),
+        Err(_) => {
+            // Longer than 16 bytes (System Exclusive), or not a MIDI event.
+            let mut big = vec![0u8; SYSEX_MAX as usize];
+            if let Ok(n) = decoder.decode(&mut big, event) {
+                out.extend_from_slice(&big[..n]);
+            }
+        }
+    }
 }

@@ -1,7 +1,7 @@
 //! MIDI inputs: where `orch run --in` reads raw MIDI bytes from.
 //!
 //! ```text
-//! IN = serial:DEVICE | rawmidi:DEVICE | udp:PORT | udp:HOST:PORT | -
+//! IN = serial:DEVICE | rawmidi:DEVICE | udp:PORT | udp:HOST:PORT | - | alsa: | alsa:CLIENT:PORT
 //! ```
 //!
 //! | IN | what |
@@ -11,14 +11,22 @@
 //! | `udp:5004` | datagrams of raw MIDI bytes on the loopback address, port 5004 |
 //! | `udp:0.0.0.0:5004` | the same on every address (or any `HOST:PORT` to bind) |
 //! | `-` | standard input |
+//! | `alsa:`, `alsa:CLIENT:PORT` | (the `alsa` feature) orch's own ALSA sequencer port, `orch in`, for any client to connect to; given a source, orch subscribes it |
 //!
 //! [`MidiIn::open`] starts a reader thread (at real-time priority where the OS allows it)
 //! that stamps each read with the host's monotonic
 //! clock ([`std::time::Instant`]) the moment it returns, and sends it as an [`InEvent`] on a
 //! channel the caller owns, so that the caller can wait on input, its own timers and
 //! anything else (signals) in one place. The end of the input (a file or standard input at
-//! its end, a serial line hung up) is an [`InEvent::End`]; a read error is
-//! [`InEvent::Failed`]. A datagram input never ends by itself.
+//! its end) is an [`InEvent::End`]; a read error is [`InEvent::Failed`]. A datagram input
+//! never ends by itself.
+//!
+//! A device can go away and come back: a USB-MIDI interface or a USB serial adapter
+//! unplugged, a serial line hung up. A `serial:` input, and a `rawmidi:` input that is a
+//! character device, then send [`InEvent::Lost`] (the caller releases every key) and try to
+//! open the same path again every [`RECONNECT_EVERY`]; when it opens, [`InEvent::Back`], and
+//! the bytes flow again. (Name the device by a path that comes back the same, such as
+//! `/dev/serial/by-id/…`.) A FIFO or a regular file at its end, and standard input, end.
 
 use std::fmt;
 use std::io::{self, Read};
@@ -39,6 +47,9 @@ pub const READ_POLL: Duration = Duration::from_millis(100);
 /// The largest read: 256 bytes are 82 ms of a DIN line.
 pub const READ_SIZE: usize = 256;
 
+/// How often a device that went away is tried again.
+pub const RECONNECT_EVERY: Duration = Duration::from_millis(250);
+
 /// What went wrong reading an `--in` specification.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct InSpecError {
@@ -52,7 +63,8 @@ impl fmt::Display for InSpecError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "--in {}: {} (give serial:DEVICE, rawmidi:DEVICE, udp:PORT, udp:HOST:PORT or -)",
+            "--in {}: {} (give serial:DEVICE, rawmidi:DEVICE, udp:PORT, udp:HOST:PORT, alsa:, \
+             alsa:CLIENT:PORT or -)",
             self.spec, self.reason
         )
     }
@@ -71,6 +83,9 @@ pub enum InTarget {
     Udp(SocketAddr),
     /// Standard input.
     Stdin,
+    /// An ALSA sequencer port of orch's own, with a source to subscribe to it if given
+    /// (`alsa:` or `alsa:CLIENT:PORT`; the `alsa` feature).
+    Alsa(Option<String>),
 }
 
 impl InTarget {
@@ -82,6 +97,9 @@ impl InTarget {
         };
         if spec == "-" {
             return Ok(InTarget::Stdin);
+        }
+        if spec == "alsa" || spec == "alsa:" {
+            return alsa_input(None).map_err(err);
         }
         let (kind, rest) = spec
             .split_once(':')
@@ -102,13 +120,23 @@ impl InTarget {
                     .map(InTarget::Udp)
                     .ok_or_else(|| err(format!("`{rest}` is not PORT or HOST:PORT")))
             }
-            "alsa" => Err(err(
-                "ALSA sequencer inputs are not supported yet; rawmidi:/dev/snd/midiCxDy reads \
-                 the same hardware"
-                    .into(),
-            )),
+            "alsa" => alsa_input(Some(rest)).map_err(err),
             other => Err(err(format!("unknown input kind `{other}`"))),
         }
+    }
+}
+
+/// `alsa:` and `alsa:SOURCE`: an input with the `alsa` feature, a clear refusal without.
+fn alsa_input(source: Option<&str>) -> Result<InTarget, String> {
+    if cfg!(feature = "alsa") {
+        Ok(InTarget::Alsa(source.map(str::to_string)))
+    } else {
+        Err(
+            "this orch was built without the `alsa` feature (cargo build --release --features \
+             alsa; it links alsa-lib); rawmidi:/dev/snd/midiCxDy reads the same hardware \
+             with no system library"
+                .into(),
+        )
     }
 }
 
@@ -122,10 +150,15 @@ pub enum InEvent {
         /// The bytes, as read.
         bytes: Vec<u8>,
     },
-    /// The input ended (end of file, a serial line hung up).
+    /// The input ended (end of file); nothing more comes.
     End,
     /// The input failed; nothing more comes.
     Failed(io::Error),
+    /// The device went away (hung up, unplugged, a read error); the reader tries to open it
+    /// again every [`RECONNECT_EVERY`]. A message it cut off is lost with it.
+    Lost(io::Error),
+    /// The device that went away is open again and read.
+    Back,
 }
 
 /// A reader thread on one input. Dropping it asks the thread to stop (readers that can time
@@ -143,6 +176,11 @@ enum Source {
     File(std::fs::File),
     Udp(UdpSocket),
     Stdin(io::Stdin),
+    /// A device gone away, closed while it is tried again.
+    Closed,
+    /// orch's ALSA sequencer port, and the bytes of events read but not handed on yet.
+    #[cfg(feature = "alsa")]
+    Alsa(crate::alsa_seq::AlsaIn, std::collections::VecDeque<u8>),
 }
 
 impl Source {
@@ -152,6 +190,23 @@ impl Source {
             Source::File(f) => f.read(buf),
             Source::Udp(s) => s.recv(buf),
             Source::Stdin(s) => s.lock().read(buf),
+            Source::Closed => Err(io::Error::from(io::ErrorKind::NotConnected)),
+            #[cfg(feature = "alsa")]
+            Source::Alsa(port, pending) => {
+                if pending.is_empty() {
+                    let mut got = Vec::new();
+                    port.read(&mut got, READ_POLL)?;
+                    if got.is_empty() {
+                        return Err(io::Error::from(io::ErrorKind::TimedOut));
+                    }
+                    pending.extend(got);
+                }
+                let n = pending.len().min(buf.len());
+                for (b, p) in buf.iter_mut().zip(pending.drain(..n)) {
+                    *b = p;
+                }
+                Ok(n)
+            }
         }
     }
 }
@@ -163,54 +218,19 @@ impl MidiIn {
         target: &InTarget,
         events: Sender<T>,
     ) -> Result<MidiIn, OutError> {
-        let open_err = |device: &str, source: io::Error| OutError::Open {
-            device: device.to_string(),
-            source,
-        };
-        let mut local = None;
-        let (name, source) = match target {
-            InTarget::Serial(p) => {
-                let device = p.to_string_lossy().into_owned();
-                let port = serialport::new(&device, DIN_BAUD)
-                    .data_bits(serialport::DataBits::Eight)
-                    .parity(serialport::Parity::None)
-                    .stop_bits(serialport::StopBits::One)
-                    .flow_control(serialport::FlowControl::None)
-                    .timeout(READ_POLL)
-                    .open()
-                    .map_err(|e| OutError::Serial {
-                        device: device.clone(),
-                        source: e,
-                    })?;
-                let got = port.baud_rate().map_err(|e| OutError::Serial {
-                    device: device.clone(),
-                    source: e,
-                })?;
-                if got != DIN_BAUD {
-                    return Err(OutError::Baud { device, got });
-                }
-                (device, Source::Serial(port))
+        let (name, source, local) = open_source(target)?;
+        let reconnects = match (target, &source) {
+            (InTarget::Serial(_), _) => true,
+            (InTarget::RawMidi(_), Source::File(f)) => {
+                use std::os::unix::fs::FileTypeExt;
+                f.metadata().is_ok_and(|m| m.file_type().is_char_device())
             }
-            InTarget::RawMidi(p) => {
-                let device = p.to_string_lossy().into_owned();
-                let file = std::fs::File::open(p).map_err(|e| open_err(&device, e))?;
-                (device, Source::File(file))
-            }
-            InTarget::Udp(addr) => {
-                let device = format!("udp:{addr}");
-                let socket = UdpSocket::bind(addr).map_err(|e| open_err(&device, e))?;
-                socket
-                    .set_read_timeout(Some(READ_POLL))
-                    .map_err(|e| open_err(&device, e))?;
-                local = socket.local_addr().ok();
-                (device, Source::Udp(socket))
-            }
-            InTarget::Stdin => ("standard input".to_string(), Source::Stdin(io::stdin())),
+            _ => false,
         };
         let stop = Arc::new(AtomicBool::new(false));
         let thread = {
             let stop = Arc::clone(&stop);
-            let hung_up_ends = matches!(target, InTarget::Serial(_));
+            let target = target.clone();
             std::thread::Builder::new()
                 .name(format!("orch-in {name}"))
                 .spawn(move || {
@@ -218,9 +238,12 @@ impl MidiIn {
                     // priority where the OS allows it.
                     let priority = orch_perform::realtime::raise_priority();
                     tracing::debug!(?priority, "input reader");
-                    read_loop(source, &stop, hung_up_ends, &events)
+                    read_loop(source, &stop, reconnects.then_some(&target), &events)
                 })
-                .map_err(|e| open_err(&name, e))?
+                .map_err(|e| OutError::Open {
+                    device: name.clone(),
+                    source: e,
+                })?
         };
         Ok(MidiIn {
             name,
@@ -254,13 +277,87 @@ impl Drop for MidiIn {
     }
 }
 
-/// `EIO`: what reading a terminal whose other end hung up returns on Linux.
-const EIO: i32 = 5;
+/// Opens an input: its name for messages, the source, and a datagram input's address.
+fn open_source(target: &InTarget) -> Result<(String, Source, Option<SocketAddr>), OutError> {
+    let open_err = |device: &str, source: io::Error| OutError::Open {
+        device: device.to_string(),
+        source,
+    };
+    Ok(match target {
+        InTarget::Serial(p) => {
+            let device = p.to_string_lossy().into_owned();
+            let port = serialport::new(&device, DIN_BAUD)
+                .data_bits(serialport::DataBits::Eight)
+                .parity(serialport::Parity::None)
+                .stop_bits(serialport::StopBits::One)
+                .flow_control(serialport::FlowControl::None)
+                .timeout(READ_POLL)
+                .open()
+                .map_err(|e| OutError::Serial {
+                    device: device.clone(),
+                    source: e,
+                })?;
+            let got = port.baud_rate().map_err(|e| OutError::Serial {
+                device: device.clone(),
+                source: e,
+            })?;
+            if got != DIN_BAUD {
+                return Err(OutError::Baud { device, got });
+            }
+            (device, Source::Serial(port), None)
+        }
+        InTarget::RawMidi(p) => {
+            let device = p.to_string_lossy().into_owned();
+            let file = std::fs::File::open(p).map_err(|e| open_err(&device, e))?;
+            (device, Source::File(file), None)
+        }
+        InTarget::Udp(addr) => {
+            let device = format!("udp:{addr}");
+            let socket = UdpSocket::bind(addr).map_err(|e| open_err(&device, e))?;
+            socket
+                .set_read_timeout(Some(READ_POLL))
+                .map_err(|e| open_err(&device, e))?;
+            let local = socket.local_addr().ok();
+            (device, Source::Udp(socket), local)
+        }
+        InTarget::Stdin => (
+            "standard input".to_string(),
+            Source::Stdin(io::stdin()),
+            None,
+        ),
+        #[cfg(feature = "alsa")]
+        InTarget::Alsa(source) => {
+            let port = crate::alsa_seq::AlsaIn::open(source.as_deref())?;
+            let name = match source {
+                Some(s) => format!("ALSA sequencer port {} (from {s})", port.address()),
+                None => format!(
+                    "ALSA sequencer port {} (connect a source: aconnect SOURCE {})",
+                    port.address(),
+                    port.address()
+                ),
+            };
+            (name, Source::Alsa(port, Default::default()), None)
+        }
+        #[cfg(not(feature = "alsa"))]
+        InTarget::Alsa(_) => {
+            return Err(OutError::Open {
+                device: "the ALSA sequencer".into(),
+                source: io::Error::new(
+                    io::ErrorKind::Unsupported,
+                    "this orch was built without the `alsa` feature",
+                ),
+            })
+        }
+    })
+}
 
+/// Reads until the end, a failure or `stop`. With `reconnect` (a device that can come back),
+/// an end or a failure is [`InEvent::Lost`], and the device is opened again every
+/// [`RECONNECT_EVERY`] until it opens ([`InEvent::Back`]) or `stop`.
 fn read_loop<T: From<InEvent>>(
     mut source: Source,
     stop: &AtomicBool,
-    hung_up_ends: bool,
+    reconnect: Option<&InTarget>,
     events: &Sender<T>,
 ) {
     let mut buf = [0u8; READ_SIZE];
@@ -282,12 +379,47 @@ fn read_loop<T: From<InEvent>>(
             {
                 continue
             }
-            Err(e) if hung_up_ends && e.raw_os_error() == Some(EIO) => InEvent::End,
             Err(e) => InEvent::Failed(e),
         };
-        let last = !matches!(event, InEvent::Bytes { .. });
+        let event = match (event, reconnect) {
+            (InEvent::End, Some(_)) => InEvent::Lost(io::Error::new(
+                io::ErrorKind::UnexpectedEof,
+                "the device hung up",
+            )),
+            (InEvent::Failed(e), Some(_)) => InEvent::Lost(e),
+            (event, _) => event,
+        };
+        let lost = matches!(event, InEvent::Lost(_));
+        let last = matches!(event, InEvent::End | InEvent::Failed(_));
         if events.send(T::from(event)).is_err() || last {
             return;
+        }
+        if let (true, Some(target)) = (lost, reconnect) {
+            // The device is gone: its descriptor goes with it, and the path is tried again.
+            drop(std::mem::replace(&mut source, Source::Closed));
+            match reopen(target, stop) {
+                Some(s) => source = s,
+                None => return,
+            }
+            if events.send(T::from(InEvent::Back)).is_err() {
+                return;
+            }
+        }
+    }
+}
+
+/// Opens `target` again every [`RECONNECT_EVERY`] until it opens; `None` once `stop` is set.
+fn reopen(target: &InTarget, stop: &AtomicBool) -> Option<Source> {
+    loop {
+        let until = Instant::now() + RECONNECT_EVERY;
+        while Instant::now() < until {
+            if stop.load(Ordering::SeqCst) {
+                return None;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        if let Ok((_, source, _)) = open_source(target) {
+            return Some(source);
         }
     }
 }
@@ -320,11 +452,63 @@ mod tests {
             ("serial:", "needs a target"),
             ("udp:99999", "not PORT"),
             ("tcp:1", "unknown input kind"),
+            #[cfg(not(feature = "alsa"))]
             ("alsa:128:0", "rawmidi"),
         ] {
             let e = InTarget::parse(bad).unwrap_err().to_string();
             assert!(e.contains(why), "{bad}: {e}");
         }
+    }
+
+    /// A pseudo-terminal pair: the master, and the slave's path (a character device).
+    fn pty() -> (nix::pty::PtyMaster, String) {
+        use nix::fcntl::OFlag;
+        let m = nix::pty::posix_openpt(OFlag::O_RDWR | OFlag::O_NOCTTY | OFlag::O_CLOEXEC).unwrap();
+        nix::pty::grantpt(&m).unwrap();
+        nix::pty::unlockpt(&m).unwrap();
+        let path = nix::pty::ptsname_r(&m).unwrap();
+        let mut t = nix::sys::termios::tcgetattr(&m).unwrap();
+        nix::sys::termios::cfmakeraw(&mut t);
+        nix::sys::termios::tcsetattr(&m, nix::sys::termios::SetArg::TCSANOW, &t).unwrap();
+        (m, path)
+    }
+
+    fn next_bytes(rx: &std::sync::mpsc::Receiver<InEvent>) -> Vec<u8> {
+        match rx.recv_timeout(Duration::from_secs(5)).unwrap() {
+            InEvent::Bytes { bytes, .. } => bytes,
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_raw_midi_device_that_goes_away_is_lost_then_back_at_the_same_path() {
+        use std::io::Write;
+        let link = std::env::temp_dir().join(format!("orch-in-dev-{}", std::process::id()));
+        let _ = std::fs::remove_file(&link);
+        let (mut first, path) = pty();
+        std::os::unix::fs::symlink(&path, &link).unwrap();
+        let (tx, rx) = std::sync::mpsc::channel::<InEvent>();
+        let input = MidiIn::open(&InTarget::RawMidi(link.clone()), tx).unwrap();
+        first.write_all(&[0x90, 60, 100]).unwrap();
+        assert_eq!(next_bytes(&rx), [0x90, 60, 100]);
+        drop(first);
+        match rx.recv_timeout(Duration::from_secs(5)).unwrap() {
+            InEvent::Lost(_) => {}
+            other => panic!("{other:?}"),
+        }
+        // Nothing while it is away (tried every RECONNECT_EVERY).
+        assert!(rx.recv_timeout(RECONNECT_EVERY * 2).is_err());
+        let (mut second, path) = pty();
+        std::fs::remove_file(&link).unwrap();
+        std::os::unix::fs::symlink(&path, &link).unwrap();
+        match rx.recv_timeout(Duration::from_secs(5)).unwrap() {
+            InEvent::Back => {}
+            other => panic!("{other:?}"),
+        }
+        second.write_all(&[0x80, 60, 0]).unwrap();
+        assert_eq!(next_bytes(&rx), [0x80, 60, 0]);
+        drop(input);
+        std::fs::remove_file(&link).unwrap();
     }
 
     #[test]
@@ -352,7 +536,7 @@ mod tests {
             match rx.recv_timeout(Duration::from_secs(5)).unwrap() {
                 InEvent::Bytes { bytes, .. } => got.extend(bytes),
                 InEvent::End => break,
-                InEvent::Failed(e) => panic!("{e}"),
+                other => panic!("{other:?}"),
             }
         }
         assert_eq!(got, [0x80, 60, 0]);

@@ -28,8 +28,9 @@
 //!
 //! ## Cargo features
 //!
-//! - `alsa` (off by default): `alsa:CLIENT:PORT` outputs, ALSA sequencer ports
-//!   ([`alsa_seq`]). It links alsa-lib (`libasound2-dev` to build).
+//! - `alsa` (off by default): `alsa:CLIENT:PORT` outputs and `alsa:` / `alsa:CLIENT:PORT`
+//!   inputs, ALSA sequencer ports ([`alsa_seq`]). It links alsa-lib (`libasound2-dev` to
+//!   build).
 //!
 //! Without it no system library is needed: serial ports through `serialport` without
 //! libudev, I2C through the kernel's `i2c-dev` interface, raw MIDI as a file.
@@ -46,7 +47,7 @@ pub mod spec;
 use std::fmt;
 
 pub use boards::{open_i2c, BoardStats, BoardsOut, LinuxI2c, ResilientBoards, TimedBus};
-pub use input::{InEvent, InSpecError, InTarget, MidiIn};
+pub use input::{InEvent, InSpecError, InTarget, MidiIn, RECONNECT_EVERY};
 pub use midi::{MidiPort, Port, PortStats, RawMidiOut, SerialOut, UdpOut};
 pub use spec::{Channels, OutSpec, SpecError, Target};
 
