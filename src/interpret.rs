@@ -114,6 +114,8 @@ pub fn run(args: &InterpretArgs) -> anyhow::Result<()> {
         printer.out.flush()?;
         Ok(())
     })?;
+    // Whether the end of the input cut a message off (as `orch decode` says it).
+    let truncated = interp.input_ended();
     let layout = &interp.config().layout;
     let boards = &layout.boards[..robot.boards];
     let mut out = printer.out;
@@ -129,8 +131,12 @@ pub fn run(args: &InterpretArgs) -> anyhow::Result<()> {
         let c = interp.counters();
         writeln!(
             out,
-            "# {} bytes, {} messages, {} dropped, {} abandoned",
-            c.bytes, c.messages, c.dropped, c.abandoned
+            "# {} bytes, {} messages, {} dropped, {} abandoned, {} truncated",
+            c.bytes,
+            c.messages,
+            c.dropped,
+            c.abandoned,
+            u8::from(truncated)
         )?;
         writeln!(
             out,

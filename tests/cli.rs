@@ -335,6 +335,15 @@ fn interpret_text_shows_fingers_and_stats() {
     );
     assert!(text.contains("1 notes: 1 sounded"), "{text}");
     assert!(text.contains("# final: 0x21=0x0000 0x22=0x0100"), "{text}");
+    assert!(text.contains("0 abandoned, 0 truncated"), "{text}");
+}
+
+#[test]
+fn interpret_says_when_the_end_of_the_input_cut_a_message_off() {
+    let (code, out, _) = run(&["interpret", "--hex"], "90 3C 7F 40");
+    assert_eq!(code, 0);
+    let text = String::from_utf8_lossy(&out);
+    assert!(text.contains("0 abandoned, 1 truncated"), "{text}");
 }
 
 #[test]
