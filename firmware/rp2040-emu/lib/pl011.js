@@ -11,7 +11,7 @@
 // - Transmit: a 32-byte FIFO shifted out one character every 10 bit periods; each leaves at
 //   the end of its stop bit (onByte). TXRIS when the FIFO level drops through the trigger
 //   level (TXIFLSEL), or the holding register empties when the FIFO is off; UARTICR clears it.
-//   Flags TXFF, TXFE, BUSY, RXFF, RXFE as the level says.
+//   Flags TXFF, TXFE, BUSY, RXFF, RXFE as the level says. UARTDMACR reads back (reset 0).
 
 const DR = 0x00;
 const FR = 0x18;
@@ -21,6 +21,7 @@ const IMSC = 0x38;
 const RIS = 0x3c;
 const MIS = 0x40;
 const ICR = 0x44;
+const DMACR = 0x48;
 
 const FEN = 1 << 4;
 const RXI = 1 << 4;
@@ -38,6 +39,7 @@ function pl011(uart) {
   let ris = 0;
   let shifting = false;
   let overruns = 0;
+  let dmacr = 0; // rp2040js reads it as all ones: DMA on, and embassy-rp's handler then returns
 
   const fifo = () => !!(uart.lineCtrlRegister & FEN);
   const depth = () => (fifo() ? 32 : 1);
@@ -102,6 +104,8 @@ function pl011(uart) {
         );
       case IFLS:
         return ifls;
+      case DMACR:
+        return dmacr;
       case RIS:
         return ris;
       case MIS:
@@ -122,6 +126,9 @@ function pl011(uart) {
         return;
       case IFLS:
         ifls = value & 0x3f;
+        return;
+      case DMACR:
+        dmacr = value & 7;
         return;
       case IMSC:
         uart.interruptMask = value & 0x7ff;
