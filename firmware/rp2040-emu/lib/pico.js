@@ -79,7 +79,12 @@ class Pico {
       if (code === TRAP && pc < 0x4000) throw new RomCallError(`the firmware called the boot ROM (PC 0x${pc.toString(16)})`);
       throw new Error(`UDF/BKPT #${code} at PC 0x${pc.toString(16)}`);
     };
-    chip.peripherals[0x40058].onWatchdogTrigger = () => {
+    const watchdog = chip.peripherals[0x40058];
+    watchdog.onWatchdogTrigger = () => {
+      // The chip resets: stop its watchdog (rp2040js's periodic alarm would fire again at
+      // once, forever), and build the chip anew before the next instruction.
+      watchdog.timer.enable = false;
+      watchdog.alarm.enable = false;
       this.resetDue = true;
     };
     pl011(chip.uart[0]);
