@@ -64,7 +64,15 @@ class Pico {
     const chip = new RP2040(); // with a SimulationClock of its own, set to `ns`
     const clock = chip.clock;
     clock.nanosCounter = ns;
-    chip.logger = quiet;
+    // rp2040js executes SEV as a no-op that it logs: make it set the event register, as the
+    // core does (embassy's executor sends one when a task wakes another, so that its WFE
+    // returns; without it the woken task waited for the next interrupt).
+    chip.logger = {
+      ...quiet,
+      info(component, message) {
+        if (message === 'SEV') chip.core.eventRegistered = true;
+      },
+    };
     chip.loadBootrom(standInRom()); // (also erases the flash)
     for (const s of this.elf.segments) {
       if (s.paddr >= 0x10000000 && s.paddr < 0x11000000) chip.flash.set(s.data, s.paddr - 0x10000000);
