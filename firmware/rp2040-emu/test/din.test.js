@@ -47,3 +47,18 @@ test('notes 0 to 127 fold into the keyboard by DIN', () => {
   const p = checkDin(s);
   assert.deepEqual(p.outputs(), [0, 0, 0, 0]);
 });
+
+test('a lone DIN message reaches its board within 400 µs of its last stop bit', () => {
+  // The UART interrupts for every byte (its FIFO off). With the FIFO on at embassy-rp's
+  // trigger level (28 of 32 bytes) a lone message waited for the receive timeout, 32 bit
+  // times (1024 µs) after its last stop bit.
+  const { booted } = require('./common.js');
+  const { p, from } = booted();
+  p.sendDin([0x90, 60, 100]);
+  const stop = p.dinIn.at(-1).ns;
+  p.runUs(5_000);
+  const write = p.bus.outputWrites(from)[0];
+  assert.ok(write, 'the note made a board write');
+  const us = (write.tNs - stop) / 1000;
+  assert.ok(us < 400, `last stop bit -> write done: ${us} µs`);
+});
