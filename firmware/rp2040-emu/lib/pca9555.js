@@ -90,9 +90,8 @@ class Pca9555Bus {
     let current = null; // { board, bytes, startNs, first, read }
     let pending = null;
     const later = (bits, fn) => {
-      const ns = ((i2c.fsClockHighPeriod + i2c.fsClockLowPeriod) * 1e9) / chip.clkSys;
       pending = fn;
-      alarm.schedule(bits * ns);
+      alarm.schedule(bits * this.bitNs(chip, i2c));
     };
     const alarm = clock.createAlarm(() => {
       const fn = pending;
@@ -155,6 +154,7 @@ class Pca9555Bus {
     };
   }
 
+  /** One SCL period as the firmware programmed it (IC_FS_SCL_HCNT + LCNT clk_sys cycles). */
   bitNs(chip, i2c) {
     return ((i2c.fsClockHighPeriod + i2c.fsClockLowPeriod) * 1e9) / chip.clkSys;
   }

@@ -142,12 +142,6 @@ class Pico {
     this.runUntilNs(this.clock.nanos + us * 1000);
   }
 
-  /** Runs `fn` at `ns` of emulated time (an alarm on the current chip's clock). */
-  at(ns, fn) {
-    const alarm = this.clock.createAlarm(fn);
-    alarm.schedule(Math.max(ns - this.clock.nanos, 0));
-  }
-
   /**
    * Puts DIN bytes on the wire back to back from now (or after the bytes still on it), one
    * every `paceUs` (320 µs: 31250 baud, 10 bits); each reaches UART0's receiver at the end

@@ -31,8 +31,6 @@ class UsbMidiHost {
     this.queue = [];
     /** Called with (bytes, ns) when a packet lands in the device's buffer. */
     this.onPacketIn = null;
-    this.onConfigured = null;
-    this.log = [];
   }
 
   /** Connects to `chip`'s USB controller (after every chip reset). */
@@ -60,12 +58,15 @@ class UsbMidiHost {
           this.device = d;
           run();
         }),
-      () => transfer(setup(0x80, 6, CONFIGURATION << 8, 0, 9), (d) => steps.unshift(() => full(d[2] | (d[3] << 8))) && run()),
+      () =>
+        transfer(setup(0x80, 6, CONFIGURATION << 8, 0, 9), (d) => {
+          steps.unshift(() => full(d[2] | (d[3] << 8))); // then all wTotalLength bytes
+          run();
+        }),
       () =>
         transfer(setup(0x00, 9, 1, 0, 0), () => {
           // SET_CONFIGURATION 1
           this.configured = true;
-          if (this.onConfigured) this.onConfigured();
           this.pump();
         }),
     );
