@@ -5,7 +5,10 @@
 #   simavr, and what avr-tester needs to build simavr from source and bind it (libclang-dev,
 #   libelf-dev, libzstd-dev, pkg-config, make and a C compiler: build-essential);
 # - the toolchain pinned in firmware/atmega16/rust-toolchain.toml, with rust-src (build-std for
-#   avr-none) and rustfmt (the test command checks the firmware's formatting).
+#   avr-none) and rustfmt (the test command checks the firmware's formatting);
+# - node and npm (Debian's, if the machine has none) and the npm packages of the Pico
+#   firmware's emulator tests, firmware/rp2040-emu (rp2040js, at the version its
+#   package-lock.json pins).
 #
 # Extra Debian packages to install in the same apt-get run can be given as arguments
 # (scripts/test.sh passes tmux). Quiet and quick when everything is there. Called by
@@ -21,6 +24,9 @@ for pkg in gcc-avr binutils-avr avr-libc simavr libclang-dev libelf-dev libzstd-
     build-essential "$@"; do
     installed "$pkg" || need+=("$pkg")
 done
+# node and npm run the Pico firmware's emulator tests (firmware/rp2040-emu); Debian's if the
+# machine has none.
+command -v node >/dev/null && command -v npm >/dev/null || need+=(nodejs npm)
 if ((${#need[@]})); then
     echo "== installing ${need[*]}"
     sudo_=""
@@ -61,3 +67,13 @@ for component in rust-src rustfmt; do
         rustup component add "$component" --toolchain "$channel"
     fi
 done
+
+# The Pico emulator's npm packages, as firmware/rp2040-emu/package-lock.json pins them (its
+# .npmrc keeps registry hosts out of the lockfile).
+emu="$here/rp2040-emu"
+want="$(node -p "require('$emu/package-lock.json').packages['node_modules/rp2040js'].version")"
+have="$(node -p "try { require('$emu/node_modules/rp2040js/package.json').version } catch { '' }")"
+if [ "$want" != "$have" ]; then
+    echo "== installing the Pico emulator's npm packages (rp2040js $want)"
+    (cd "$emu" && npm ci --no-audit --no-fund --loglevel=error)
+fi

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Builds the ATmega16 firmware and runs its hardware-in-the-loop tests in simavr, and builds
-# the Raspberry Pi Pico firmware (firmware/rp2040) for thumbv6m-none-eabi.
+# the Raspberry Pi Pico firmware (firmware/rp2040) for thumbv6m-none-eabi and runs its tests in
+# the rp2040js emulator (firmware/rp2040-emu: node's test runner, orch-core on the host through
+# firmware/rp2040-emu/expect).
 #
 # From a fresh machine: installs what is missing (Debian packages, the nightly's rust-src),
 # builds the firmware ELF at
@@ -34,6 +36,10 @@ pico="$here/rp2040/target/thumbv6m-none-eabi/release/orch-rp2040"
 echo "== $pico"
 size_tool="$(command -v llvm-size || command -v arm-none-eabi-size || true)"
 [ -z "$size_tool" ] || "$size_tool" "$pico"
+
+echo "== the Pico firmware in an RP2040 emulator (rp2040js, firmware/rp2040-emu)"
+(cd "$here/rp2040-emu/expect" && cargo build --release --locked)
+(cd "$here/rp2040-emu" && ORCH_RP2040_ELF="$pico" timeout 600 node --test test/*.test.js)
 
 echo "== the orch command, for the thesis's whole chain (tests/chain.rs: orch play -> pty -> simavr)"
 (cd "$here/.." && cargo build --locked -p orch)

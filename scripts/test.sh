@@ -45,7 +45,8 @@ cargo test --workspace --all-features
 step "orch-baton: every generated conductor video at 30 and 60 fps (heavy: release)"
 cargo test -p orch-baton --release --test videos -- --ignored
 
-step "firmware: the thesis's ATmega16 board, built and tested in simavr (firmware/test.sh)"
+step "firmware: the thesis's ATmega16 board, built and tested in simavr; the Raspberry Pi Pico firmware, built and tested in rp2040js (firmware/test.sh)"
 (cd firmware/atmega16 && cargo fmt -- --check)
 (cd firmware/atmega16-hil && cargo fmt -- --check && cargo clippy --all-targets -- -D warnings)
+(cd firmware/rp2040-emu/expect && cargo fmt -- --check && cargo clippy --all-targets -- -D warnings)
 bash firmware/test.sh

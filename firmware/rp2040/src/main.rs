@@ -94,6 +94,15 @@ async fn main(spawner: Spawner) {
         RX_BUF.init([0; 64]),
         config,
     );
+    // Each byte as it comes: without its FIFO the UART interrupts for every byte. With it
+    // (embassy-rp's setting: interrupt at 28 of 32 bytes, or 32 bit times after the last
+    // byte) a DIN message waited 1 ms after its last stop bit, and a full-rate stream came in
+    // batches of 28 bytes (9 ms) stamped with one time. 31250 baud leaves the interrupt
+    // 320 µs a byte. The line control register changes only with the UART off.
+    let uart0 = embassy_rp::pac::UART0;
+    uart0.uartcr().modify(|w| w.set_uarten(false));
+    uart0.uartlcr_h().modify(|w| w.set_fen(false));
+    uart0.uartcr().modify(|w| w.set_uarten(true));
     let (thru, din_rx) = din.split();
     spawner.spawn(din_task(din_rx, thru).expect("one DIN task"));
 
