@@ -64,7 +64,10 @@ const BIT_RATE: (u8, u8) = {
     }
     assert!(twps <= 3);
     let twbr = x >> (2 * twps);
-    assert!(twbr >= 10, "ORCH_TWI_HZ: TWBR would be below the datasheet's 10");
+    assert!(
+        twbr >= 10,
+        "ORCH_TWI_HZ: TWBR would be below the datasheet's 10"
+    );
     (twbr as u8, twps as u8)
 };
 /// TWBR (40 at 83.33 kHz: 8 MHz / 96).
