@@ -33,7 +33,10 @@ pub fn elf_path() -> PathBuf {
 /// the default in `firmware/atmega16/.cargo/config.toml`'s `[env]`, the one place it is kept.
 pub fn twi_hz() -> u64 {
     if let Ok(v) = std::env::var("ORCH_TWI_HZ") {
-        return v.replace('_', "").parse().expect("ORCH_TWI_HZ: a number of Hz");
+        return v
+            .replace('_', "")
+            .parse()
+            .expect("ORCH_TWI_HZ: a number of Hz");
     }
     let config = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
