@@ -6,7 +6,8 @@
 //! - orch-core's decoder, interpreter and safety guard (`Interpreter<4, 61, NotePool<32>,
 //!   Thesis>`: the thesis's keyboard and configuration, as constants), with time from Timer1
 //!   (1 µs ticks).
-//! - The four PCA9555 finger boards at 0x21..=0x24 on the TWI (83.33 kHz, as in the thesis),
+//! - The four PCA9555 finger boards at 0x21..=0x24 on the TWI (83.33 kHz as in the thesis, or
+//!   up to 222 kHz: `ORCH_TWI_HZ` at build time),
 //!   interrupt-driven: writes are queued and go out while the main loop decodes the next
 //!   bytes, with timeouts, bus recovery and retries. A board is written only when its bits
 //!   change, in one transaction.
