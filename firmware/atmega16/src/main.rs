@@ -32,7 +32,7 @@ use avr_device::atmega16::Peripherals;
 use orch_core::{BoardId, FingerBoards, Instant, Interpreter, NotePool, Thesis};
 
 /// How often boards that failed are initialised and written again.
-const RETRY_US: u64 = 10_000;
+const RETRY_US: u32 = 10_000;
 
 type Robot = Interpreter<4, 61, NotePool<32>, Thesis>;
 
@@ -107,8 +107,10 @@ fn main() -> ! {
     for i in 0..4u8 {
         init_board(i, 0);
     }
+    // The retry and publish times in the low 32 bits of the µs clock (they are at most 250 ms
+    // ahead, compared by wrapping difference): fewer live bytes in the loop than 64-bit ones.
     let mut retry_at = RETRY_US;
-    let mut publish_at = 0u64;
+    let mut publish_at = 0u32;
     // The guard's next deadline, asked again after every call that may move it: the loop
     // compares times with it, and asks orch-core (a few hundred cycles) only after feeding
     // a byte or running a timer, once the write it made is on its way.
@@ -144,7 +146,8 @@ fn main() -> ! {
             probe::work(false);
         }
         let failed = twi::failed();
-        if failed != 0 && now >= retry_at && twi::idle() {
+        let now32 = now as u32;
+        if failed != 0 && reached(now32, retry_at) && twi::idle() {
             // Whatever a board holds after coming back, it gets the frame's outputs again.
             for i in 0..4u8 {
                 if failed & (1 << i) != 0 {
@@ -152,13 +155,20 @@ fn main() -> ! {
                     init_board(i, robot.frame().outputs(i as usize));
                 }
             }
-            retry_at = now + RETRY_US;
+            retry_at = now32.wrapping_add(RETRY_US);
         }
-        if now >= publish_at {
+        if reached(now32, publish_at) {
             probe::publish();
-            publish_at = now + 250_000;
+            publish_at = now32.wrapping_add(250_000);
         }
     }
+}
+
+/// Whether the low 32 bits of the µs clock, `now`, are at or past `at` (less than 35 minutes
+/// apart either way).
+#[inline(always)]
+fn reached(now: u32, at: u32) -> bool {
+    (now.wrapping_sub(at) as i32) >= 0
 }
 
 /// Runs the guard's timers at `at` and queues what they changed.
