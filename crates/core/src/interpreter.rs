@@ -125,11 +125,10 @@ pub struct Interpreter<
     sensing: bool,
     /// No per-key deadline falls before this ([`Kept::NEVER`] if none runs).
     due: Kept,
-    /// [`next_deadline`](Self::next_deadline), kept up to date ([`Kept::NEVER`] for `None`) by
-    /// [`refresh`](Self::refresh) at the end of every call that changes the state.
-    deadline: Kept,
-    /// The earliest time [`tick`](Self::tick) has anything to do: [`deadline`](Self::deadline),
-    /// or earlier when the Active Sensing rule would lapse with no key down ([`Kept::NEVER`]: nothing).
+    /// The earliest time [`tick`](Self::tick) has anything to do ([`Kept::NEVER`]: nothing),
+    /// kept up to date by [`refresh`](Self::refresh) at the end of every call that changes the
+    /// state: with a key down or waiting, [`next_deadline`](Self::next_deadline); else `due`,
+    /// or earlier when the Active Sensing rule would lapse.
     wake: Kept,
     /// The last multiple of 2³⁰ µs the clock passed: per-key ages are clamped when it passes
     /// the next one.
@@ -203,7 +202,6 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             last_input: Instant::ZERO,
             sensing: false,
             due: Kept::NEVER,
-            deadline: Kept::NEVER,
             wake: Kept::NEVER,
             clamped: Instant::ZERO,
             #[cfg(feature = "stats")]
@@ -374,10 +372,13 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// the first thing to do; it can be earlier (a key released in the meantime), in which case
     /// that tick does nothing and the next call answers anew.
     pub fn next_deadline(&self) -> Option<Instant> {
-        (self.deadline != Kept::NEVER).then_some(self.deadline.get())
+        // With no key down or waiting, the quiet rules have nothing to cut: only `due`.
+        let busy = self.fingers.down + self.fingers.pending > 0;
+        let deadline = if busy { self.wake } else { self.due };
+        (deadline != Kept::NEVER).then_some(deadline.get())
     }
 
-    /// Recomputes [`deadline`](Self::deadline) and [`wake`](Self::wake) from `due`,
+    /// Recomputes [`wake`](Self::wake) from `due`,
     /// `last_input`, `sensing` and the key counts: called at the end of every public method
     /// that can change them.
     fn refresh(&mut self) {
@@ -399,9 +400,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 wake = wake.min_after(self.last_input, quiet);
             }
         }
-        // Each stored once (64-bit stores are dear on 8-bit MCUs).
+        // Stored once (64-bit stores are dear on 8-bit MCUs).
         self.wake = wake;
-        self.deadline = if busy { wake } else { self.due };
     }
 
     /// Runs the guard's timers at `now`: hold limits, the duty limit, delayed re-strikes, the
