@@ -130,9 +130,6 @@ pub struct Interpreter<
     /// state: with a key down or waiting, [`next_deadline`](Self::next_deadline); else `due`,
     /// or earlier when the Active Sensing rule would lapse.
     wake: Kept,
-    /// The last multiple of 2³⁰ µs the clock passed: per-key ages are clamped when it passes
-    /// the next one.
-    clamped: Instant,
     #[cfg(feature = "stats")]
     stats: Stats,
 }
@@ -203,7 +200,6 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             sensing: false,
             due: Kept::NEVER,
             wake: Kept::NEVER,
-            clamped: Instant::ZERO,
             #[cfg(feature = "stats")]
             stats: NO_STATS,
         }
@@ -542,8 +538,9 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         }
         let before = self.clock;
         self.clock = now;
-        // `clamped` <= `before` < `now`: no wrap.
-        if now.as_micros().wrapping_sub(self.clamped.as_micros()) >= CLAMP_EVERY {
+        // Passed a multiple of 2³⁰ µs: the bits above differ. `before` is in registers already,
+        // so this costs no loads (it was kept as a field, the last multiple passed).
+        if now.as_micros() ^ before.as_micros() >= CLAMP_EVERY {
             self.clamp_ages(before, now);
         }
     }
@@ -564,7 +561,6 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             self.fingers.clamp_ages(before, false);
             self.fingers.clamp_ages(now, false);
         }
-        self.clamped = Instant::from_micros(now.as_micros() & !(CLAMP_EVERY - 1));
     }
 
     /// The duty limit, if any. Always `None` without the `duty-limit` feature (a configuration
