@@ -125,15 +125,11 @@ pub struct Interpreter<
     sensing: bool,
     /// No per-key deadline falls before this ([`Kept::NEVER`] if none runs).
     due: Kept,
-    /// [`next_deadline`](Self::next_deadline), kept up to date ([`Kept::NEVER`] for `None`) by
-    /// [`refresh`](Self::refresh) at the end of every call that changes the state.
-    deadline: Kept,
-    /// The earliest time [`tick`](Self::tick) has anything to do: [`deadline`](Self::deadline),
-    /// or earlier when the Active Sensing rule would lapse with no key down ([`Kept::NEVER`]: nothing).
+    /// The earliest time [`tick`](Self::tick) has anything to do ([`Kept::NEVER`]: nothing),
+    /// kept up to date by [`refresh`](Self::refresh) at the end of every call that changes the
+    /// state: with a key down or waiting, [`next_deadline`](Self::next_deadline); else `due`,
+    /// or earlier when the Active Sensing rule would lapse.
     wake: Kept,
-    /// The last multiple of 2³⁰ µs the clock passed: per-key ages are clamped when it passes
-    /// the next one.
-    clamped: Instant,
     #[cfg(feature = "stats")]
     stats: Stats,
 }
@@ -203,9 +199,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             last_input: Instant::ZERO,
             sensing: false,
             due: Kept::NEVER,
-            deadline: Kept::NEVER,
             wake: Kept::NEVER,
-            clamped: Instant::ZERO,
             #[cfg(feature = "stats")]
             stats: NO_STATS,
         }
@@ -384,10 +378,13 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// the first thing to do; it can be earlier (a key released in the meantime), in which case
     /// that tick does nothing and the next call answers anew.
     pub fn next_deadline(&self) -> Option<Instant> {
-        (self.deadline != Kept::NEVER).then_some(self.deadline.get())
+        // With no key down or waiting, the quiet rules have nothing to cut: only `due`.
+        let busy = self.fingers.down + self.fingers.pending > 0;
+        let deadline = if busy { self.wake } else { self.due };
+        (deadline != Kept::NEVER).then_some(deadline.get())
     }
 
-    /// Recomputes [`deadline`](Self::deadline) and [`wake`](Self::wake) from `due`,
+    /// Recomputes [`wake`](Self::wake) from `due`,
     /// `last_input`, `sensing` and the key counts: called at the end of every public method
     /// that can change them.
     fn refresh(&mut self) {
@@ -409,9 +406,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 wake = wake.min_after(self.last_input, quiet);
             }
         }
-        // Each stored once (64-bit stores are dear on 8-bit MCUs).
+        // Stored once (64-bit stores are dear on 8-bit MCUs).
         self.wake = wake;
-        self.deadline = if busy { wake } else { self.due };
     }
 
     /// Runs the guard's timers at `now`: hold limits, the duty limit, delayed re-strikes, the
@@ -552,8 +548,9 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         }
         let before = self.clock;
         self.clock = now;
-        // `clamped` <= `before` < `now`: no wrap.
-        if now.as_micros().wrapping_sub(self.clamped.as_micros()) >= CLAMP_EVERY {
+        // Passed a multiple of 2³⁰ µs: the bits above differ. `before` is in registers already,
+        // so this costs no loads (it was kept as a field, the last multiple passed).
+        if now.as_micros() ^ before.as_micros() >= CLAMP_EVERY {
             self.clamp_ages(before, now);
         }
     }
@@ -574,7 +571,6 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             self.fingers.clamp_ages(before, false);
             self.fingers.clamp_ages(now, false);
         }
-        self.clamped = Instant::from_micros(now.as_micros() & !(CLAMP_EVERY - 1));
     }
 
     /// The duty limit, if any. Always `None` without the `duty-limit` feature (a configuration

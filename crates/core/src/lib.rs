@@ -47,14 +47,14 @@
 //! | the 61 keys' heat for the duty limit (feature `duty-limit`, off on the ATmega16) | 122 (+6 padding) |
 //! | held notes, [`NotePool<32>`](NotePool) (for MCUs: 32 notes played or sustained at once, twice the power budget) | 97 |
 //! | held notes, [`NoteTable`] (the default: every channel of every note, played and sustained, exact under any load) | 512 |
-//! | frame 16, decoder 28, clock, last input, kept deadlines and pedals 51 | ≈ 100 |
+//! | frame 16, decoder 28, clock, last input, kept deadlines and pedals 35 | ≈ 84 |
 //! | the configuration (none with a constant one: [`Thesis`]) | 68 |
 //! | the statistics (feature `stats`, off on the ATmega16) | 64 |
-//! | `Interpreter<4, 61, NotePool<32>>` without `duty-limit` and `stats` | 648 |
-//! | **`Interpreter<4, 61, NotePool<32>, Thesis>` without `duty-limit` and `stats`: the ATmega16 build** | **584** |
-//! | **[`Interpreter`] with [`NoteTable`], the duty limit and the statistics: the host's** | **1248** |
+//! | `Interpreter<4, 61, NotePool<32>>` without `duty-limit` and `stats` | 632 |
+//! | **`Interpreter<4, 61, NotePool<32>, Thesis>` without `duty-limit` and `stats`: the ATmega16 build** | **568** |
+//! | **[`Interpreter`] with [`NoteTable`], the duty limit and the statistics: the host's** | **1232** |
 //!
-//! AVR has no padding, so the ATmega16 figure is a few bytes lower (575). The [`Decoder`]
+//! AVR has no padding, so the ATmega16 figure is a few bytes lower (560). The [`Decoder`]
 //! alone takes 28 bytes.
 //!
 //! ## Cargo features

@@ -85,11 +85,24 @@ fn timed_chunks() -> impl Strategy<Value = Vec<(u64, Vec<u8>)>> {
     prop::collection::vec((gap, musical_chunk()), 0..80)
 }
 
+/// Where the streams begin, in whole ms: at zero, or a few seconds before the clock passes
+/// a multiple of 2³⁰ µs (per-key ages are clamped) or 2³² µs (the low 32 bits of the clock,
+/// as the keys keep their stamps, wrap).
+fn start() -> impl Strategy<Value = u64> {
+    let before = |us: u64| (us / 1000 - 4_000..us / 1000).prop_map(|ms| ms * 1000);
+    prop_oneof![
+        2 => Just(0u64),
+        1 => before(1 << 30),
+        1 => before(3 << 30),
+        1 => before(1 << 32),
+    ]
+}
+
 /// Ticks only at `next_deadline()`, as the firmware does.
-fn run_at_deadlines(config: Config<4>, chunks: &[(u64, Vec<u8>)], end: u64) -> Run {
+fn run_at_deadlines(config: Config<4>, start: u64, chunks: &[(u64, Vec<u8>)], end: u64) -> Run {
     let mut robot = Robot::new(config).unwrap();
     let mut run = Run::default();
-    let mut t = 0;
+    let mut t = start;
     let mut ticks = 0;
     let mut until = |robot: &mut Robot, run: &mut Run, t: u64| {
         while let Some(d) = robot.next_deadline().filter(|d| d.as_micros() <= t) {
@@ -120,10 +133,10 @@ fn run_at_deadlines(config: Config<4>, chunks: &[(u64, Vec<u8>)], end: u64) -> R
 }
 
 /// Ticks every millisecond the exhaustive way, and before every byte.
-fn run_every_ms(config: Config<4>, chunks: &[(u64, Vec<u8>)], end: u64) -> Run {
+fn run_every_ms(config: Config<4>, start: u64, chunks: &[(u64, Vec<u8>)], end: u64) -> Run {
     let mut robot = Robot::new(config).unwrap();
     let mut run = Run::default();
-    let mut clock = 0;
+    let mut clock = start;
     let mut until = |robot: &mut Robot, run: &mut Run, t: u64| {
         while clock <= t {
             let now = Instant::from_micros(clock);
@@ -133,7 +146,7 @@ fn run_every_ms(config: Config<4>, chunks: &[(u64, Vec<u8>)], end: u64) -> Run {
             clock += 1000;
         }
     };
-    let mut t = 0;
+    let mut t = start;
     for (gap, bytes) in chunks {
         t += gap * 1000;
         until(&mut robot, &mut run, t);
@@ -160,13 +173,14 @@ proptest! {
     #[test]
     fn ticking_at_next_deadline_equals_ticking_every_millisecond(
         config in config(),
+        start in start(),
         chunks in timed_chunks(),
     ) {
         let total: u64 = chunks.iter().map(|(gap, _)| gap * 1000).sum();
         // Past the longest limit (hold 400 ms, watchdog 5 s), so every timer has fired.
-        let end = total + 6_000_000;
-        let fast = run_at_deadlines(config, &chunks, end);
-        let reference = run_every_ms(config, &chunks, end);
+        let end = start + total + 6_000_000;
+        let fast = run_at_deadlines(config, start, &chunks, end);
+        let reference = run_every_ms(config, start, &chunks, end);
         prop_assert_eq!(&fast.events, &reference.events);
         prop_assert_eq!(&fast.writes, &reference.writes);
         prop_assert_eq!(fast, reference);

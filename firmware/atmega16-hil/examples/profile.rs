@@ -26,7 +26,35 @@ fn main() {
     // `AvrSimulator` keeps its `avr_t` to itself; its Debug output names the pointer.
     let avr = avr_pointer(&format!("{sim:?}"));
 
-    let stream = orch_atmega16_hil::flood_stream(seconds);
+    // `ORCH_PROFILE_STREAM=notes`: the figures' six note messages (own status and running
+    // status, Note-On and Note-Off) over and over, each followed by 3 ms of silence, so that
+    // every message is worked on at rest, as the figures measure it. Else the flood.
+    let notes = std::env::var("ORCH_PROFILE_STREAM").is_ok_and(|v| v == "notes");
+    let stream: Vec<Option<u8>> = if notes {
+        let msgs: [&[u8]; 6] = [
+            &[0x90, 60, 100],
+            &[0x90, 64, 100],
+            &[67, 100],
+            &[0x80, 60, 0],
+            &[64, 0],
+            &[67, 0],
+        ];
+        let n = (seconds * 1_000_000 / SIM_BYTE_US) as usize;
+        let mut s = Vec::new();
+        while s.len() < n {
+            for m in msgs {
+                s.extend(m.iter().map(|&b| Some(b)));
+                s.extend([None; 9]);
+            }
+        }
+        s
+    } else {
+        orch_atmega16_hil::flood_stream(seconds)
+            .into_iter()
+            .map(Some)
+            .collect()
+    };
+    let bytes = stream.iter().flatten().count();
     let mut per_fn = vec![0u64; symbols.len() + 1];
     let mut busy_fn = vec![0u64; symbols.len() + 1];
     // Busy cycles by program counter, for `ORCH_PROFILE_LINES=1` (source lines by addr2line).
@@ -39,7 +67,9 @@ fn main() {
     let end = boot + stream.len() as u64 * per_byte + 100_000 * (F_CPU / 1_000_000);
     while cycles < end {
         if cycles >= next_byte && i < stream.len() {
-            sim.write_uart('0', stream[i]);
+            if let Some(b) = stream[i] {
+                sim.write_uart('0', b);
+            }
             i += 1;
             next_byte += per_byte;
         }
@@ -69,13 +99,13 @@ fn main() {
     let busy: u64 = busy_fn.iter().sum();
     println!(
         "{} bytes of MIDI in {:.1} s simulated ({} messages); {} cycles after boot, {} ({:.0} %) working: {:.0} cycles a byte",
-        stream.len(),
+        bytes,
         total as f64 / F_CPU as f64,
-        stream.len() / 2,
+        if notes { bytes * 6 / 14 } else { bytes / 2 },
         total,
         busy,
         busy as f64 * 100.0 / total as f64,
-        busy as f64 / stream.len() as f64
+        busy as f64 / bytes as f64
     );
     println!("  working            all   function");
     let mut rows: Vec<usize> = (0..per_fn.len()).collect();

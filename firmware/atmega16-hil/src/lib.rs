@@ -29,6 +29,27 @@ pub fn elf_path() -> PathBuf {
         .join("../atmega16/target/avr-none/release/orch-atmega16.elf")
 }
 
+/// The bus clock the firmware was built with: `ORCH_TWI_HZ` if set (as when it was built), or
+/// the default in `firmware/atmega16/.cargo/config.toml`'s `[env]`, the one place it is kept.
+pub fn twi_hz() -> u64 {
+    if let Ok(v) = std::env::var("ORCH_TWI_HZ") {
+        return v
+            .replace('_', "")
+            .parse()
+            .expect("ORCH_TWI_HZ: a number of Hz");
+    }
+    let config = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../atmega16/.cargo/config.toml"
+    ))
+    .expect("firmware/atmega16/.cargo/config.toml");
+    config
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("ORCH_TWI_HZ = "))
+        .and_then(|v| v.trim_matches('"').replace('_', "").parse().ok())
+        .expect("ORCH_TWI_HZ = \"…\" in firmware/atmega16/.cargo/config.toml")
+}
+
 /// One finished write transaction seen by a board.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Transaction {

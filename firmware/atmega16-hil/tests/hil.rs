@@ -384,19 +384,6 @@ fn a_full_rate_din_line_loses_no_press_or_release() {
     );
 }
 
-/// The firmware's bus clock: `TWI_HZ` in firmware/atmega16/src/twi.rs (the one place).
-fn twi_hz() -> u64 {
-    let src = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../atmega16/src/twi.rs"
-    ))
-    .unwrap();
-    src.lines()
-        .find_map(|l| l.strip_prefix("pub const TWI_HZ: u32 = "))
-        .and_then(|v| v.trim_end_matches(';').replace('_', "").parse().ok())
-        .expect("pub const TWI_HZ: u32 = …; in twi.rs")
-}
-
 /// The size of section `name` in a 32-bit little-endian ELF file, 0 if it has none.
 fn elf_section_size(path: &std::path::Path, name: &str) -> u64 {
     let f = std::fs::read(path).unwrap();
@@ -544,4 +531,56 @@ fn figures() {
     }
     assert!(data + bss + (stack as u64) < 1024);
     assert!(flash_text + data < 16384);
+}
+
+/// The SCL period the ATmega16 makes for a bus clock of `hz`, in CPU cycles: F_CPU / (16 + 2 ·
+/// TWBR · 4^TWPS), with TWBR · 4^TWPS rounded as the firmware rounds it.
+fn scl_period_cycles(hz: u64) -> u64 {
+    let divider = (F_CPU + hz / 2) / hz;
+    16 + 2 * ((divider - 16) / 2)
+}
+
+/// The firmware runs the bus at the clock it was built with (`ORCH_TWI_HZ`): in simavr each
+/// data byte of a write takes 9 SCL periods; what the write takes besides is the TWI
+/// interrupt's answer to each step (probe PD5, plus its entry before the probe rises).
+#[test]
+fn the_bus_runs_at_the_chosen_twi_hz() {
+    let mut hil = Hil::new();
+    hil.boot();
+    let from = hil.bus.borrow().log.len();
+    hil.send(&[0x90, 60, 100]);
+    // The cycles the TWI interrupt's probe is up, by the cycle they end.
+    let mut in_handler = Vec::new();
+    let end = hil.cycles.get() + 5_000 * 8;
+    while hil.cycles.get() < end {
+        let n = hil.step();
+        if hil.pin('D', 5) {
+            in_handler.push((hil.cycles.get(), n));
+        }
+    }
+    let bus = hil.bus.borrow();
+    let t = bus.log[from..]
+        .iter()
+        .find(|t| t.bytes[0] == 2)
+        .expect("the note made a board write");
+    let handler: u64 = in_handler
+        .iter()
+        .filter(|&&(c, _)| (t.start_cycle..=t.stop_cycle).contains(&c))
+        .map(|&(_, n)| n)
+        .sum();
+    let bus_cycles = t.stop_cycle - t.start_cycle - handler;
+    let bit = scl_period_cycles(twi_hz());
+    println!(
+        "ORCH_TWI_HZ {}: the write took {} cycles, {handler} of them in the TWI interrupt; 27 SCL periods are {}",
+        twi_hz(),
+        t.stop_cycle - t.start_cycle,
+        27 * bit
+    );
+    // Four interrupts in the write, each entered within 60 cycles (the probe rises a few
+    // instructions in, and the main loop masks interrupts now and then): at 83.33 kHz less
+    // than 27 × two TWBR steps (75 kHz and 90 kHz fail), at 222 kHz four steps.
+    assert!(
+        (27 * bit..=27 * bit + 4 * 60).contains(&bus_cycles),
+        "the write's bus time was {bus_cycles} cycles, not 27 SCL periods of {bit} cycles"
+    );
 }

@@ -32,8 +32,9 @@ pub fn ticks16_raw() -> u16 {
     tc1().tcnt1.read().bits()
 }
 
-/// Microseconds since power-up.
-pub fn now_us() -> u64 {
+/// The overflow count and Timer1, read together (interrupts off).
+#[inline(always)]
+fn read() -> (u32, u16) {
     avr_device::interrupt::free(|_| {
         let t = tc1().tcnt1.read().bits();
         // SAFETY: interrupts are off, so the overflow handler cannot run meanwhile.
@@ -42,17 +43,25 @@ pub fn now_us() -> u64 {
         if tc1().tifr.read().bits() & TOV1 != 0 && t < 0x8000 {
             ovf = ovf.wrapping_add(1);
         }
-        ((ovf as u64) << 16) | t as u64
+        (ovf, t)
     })
+}
+
+/// Microseconds since power-up.
+pub fn now_us() -> u64 {
+    let (ovf, t) = read();
+    ((ovf as u64) << 16) | t as u64
 }
 
 /// The full time of a stamp taken at most 65 ms ago (the low 16 bits of the clock then). A
 /// stamp older than that (the main loop stalled) comes out up to 65 ms late, never in the
-/// future.
+/// future. Built from the overflow count (one less if Timer1 has wrapped since the stamp),
+/// with no 64-bit arithmetic.
 #[inline(always)]
 pub fn since(stamp: u16) -> u64 {
-    let now = now_us();
-    now - (now as u16).wrapping_sub(stamp) as u64
+    let (ovf, t) = read();
+    let ovf = if t < stamp { ovf.wrapping_sub(1) } else { ovf };
+    ((ovf as u64) << 16) | stamp as u64
 }
 
 #[avr_device::interrupt(atmega16)]

@@ -2,7 +2,7 @@
 //! them on the bus one after another, while the main loop goes on decoding MIDI. Every write
 //! is one transaction `[register, lo, hi]` to one PCA9555.
 //!
-//! - Clock: [`TWI_HZ`], the one place to change it; TWBR and the prescaler follow from it.
+//! - Clock: [`TWI_HZ`], chosen at build time (`ORCH_TWI_HZ`); TWBR and the prescaler follow.
 //! - A NACK or a lost arbitration tries the write again, [`ATTEMPTS`] times in all; a board
 //!   that still fails is marked in [`failed`], its queued writes are dropped (they are never
 //!   sent out of order, and an initialisation's configuration write never follows a failed
@@ -17,18 +17,44 @@ use orch_boards::registers::{CONFIGURATION_0, OUTPUT_PORT_0};
 
 use crate::clock;
 
-/// The bus clock. The thesis's 83.33 kHz by default; at most 400 kHz (the PCA9555's and the
-/// ATmega16's fast mode; note that the ATmega16 datasheet asks for TWBR ≥ 10 in master mode,
-/// which at 8 MHz means at most 222 kHz).
-pub const TWI_HZ: u32 = 83_333;
+/// The bus clock in Hz, chosen at build time: the `ORCH_TWI_HZ` environment variable (decimal,
+/// `_` allowed), whose default, the thesis's 83 333 Hz, is set in `.cargo/config.toml`'s
+/// `[env]` (an `ORCH_TWI_HZ` in the environment wins). Cargo rebuilds when it changes.
+/// From 10 kHz (below it one byte, 9 bit times, outlasts [`STEP_TIMEOUT_US`]) up to the fastest the ATmega16 datasheet allows a master at 8 MHz: it asks for
+/// TWBR ≥ 10, and SCL = F_CPU / (16 + 2 · TWBR · 4^TWPS), so 8 MHz / 36 = 222 222 Hz. TWBR and
+/// the prescaler follow ([`TWBR`], [`TWPS`]); a value out of range does not build.
+pub const TWI_HZ: u32 = parse_hz(env!("ORCH_TWI_HZ"));
+
+/// The fastest bus clock the datasheet allows at 8 MHz (TWBR = 10, prescaler 1).
+pub const TWI_HZ_MAX: u32 = F_CPU / (16 + 2 * 10);
 
 const F_CPU: u32 = 8_000_000;
+
+/// `ORCH_TWI_HZ`'s digits as a number, at compile time.
+const fn parse_hz(s: &str) -> u32 {
+    let b = s.as_bytes();
+    assert!(!b.is_empty(), "ORCH_TWI_HZ: a number of Hz");
+    let mut v: u32 = 0;
+    let mut i = 0;
+    while i < b.len() {
+        match b[i] {
+            b'0'..=b'9' => {
+                assert!(v <= (u32::MAX - 9) / 10, "ORCH_TWI_HZ: too large");
+                v = v * 10 + (b[i] - b'0') as u32;
+            }
+            b'_' => {}
+            _ => panic!("ORCH_TWI_HZ: decimal digits only"),
+        }
+        i += 1;
+    }
+    v
+}
 
 /// (TWBR, TWPS) for [`TWI_HZ`]: SCL = F_CPU / (16 + 2 · TWBR · 4^TWPS).
 const BIT_RATE: (u8, u8) = {
     assert!(
-        TWI_HZ >= 1_000 && TWI_HZ <= 400_000,
-        "TWI_HZ: 1 kHz ..= 400 kHz"
+        TWI_HZ >= 10_000 && TWI_HZ <= TWI_HZ_MAX,
+        "ORCH_TWI_HZ: 10000 ..= 222222 (the ATmega16 datasheet: TWBR >= 10 in master mode)"
     );
     let divider = (F_CPU + TWI_HZ / 2) / TWI_HZ;
     let x = (divider - 16) / 2; // TWBR · 4^TWPS
@@ -37,7 +63,12 @@ const BIT_RATE: (u8, u8) = {
         twps += 1;
     }
     assert!(twps <= 3);
-    ((x >> (2 * twps)) as u8, twps as u8)
+    let twbr = x >> (2 * twps);
+    assert!(
+        twbr >= 10,
+        "ORCH_TWI_HZ: TWBR would be below the datasheet's 10"
+    );
+    (twbr as u8, twps as u8)
 };
 /// TWBR (40 at 83.33 kHz: 8 MHz / 96).
 pub const TWBR: u8 = BIT_RATE.0;
