@@ -293,12 +293,7 @@ pub fn follow(
         let action = follower.cue(&cue.cue, control.time_map().as_ref());
         let bpm = follower.bpm();
         let is_beat = matches!(cue.cue, Cue::Beat { .. });
-        match action {
-            Action::Tempo(t) => control.set_tempo(t),
-            Action::Pause => control.pause(),
-            Action::Resume => control.resume(),
-            Action::Nothing => {}
-        }
+        action.apply(control, cue.t_us);
         set(&|s| {
             s.beats += u64::from(is_beat);
             s.bpm = bpm.or(s.bpm);
