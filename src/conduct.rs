@@ -28,7 +28,7 @@ pub enum SourceSpec {
     /// `baton:VIDEO`: a video of a baton with a red LED, played in real time from the score's
     /// start.
     Baton(PathBuf),
-    /// `tap`: the space bar (or any key but q) in the live view.
+    /// `tap`: the space bar (or any key but q, Esc and the jump keys) in the live view.
     Tap,
     /// `midi-clock:IN`: raw MIDI bytes carrying clock.
     MidiClock(ClockIn),
@@ -373,6 +373,7 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
         ));
     }
     let song = play::load_song(&args.file)?;
+    let from_us = play::from_bar(&song, args.from)?;
     let robot = play::load_robot(args.robot.as_deref())?;
     let setup = play::setup(&robot, !args.no_compensation, Tempo::NORMAL);
     let lanes = play::open_lanes(play::out_specs(&args.outs)?, &setup)?;
@@ -420,6 +421,8 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
         song,
         lanes,
         LiveOptions {
+            command: "orch conduct",
+            from_us,
             view: !args.no_view,
             file: &args.file,
             conductor: Some(Conductor {

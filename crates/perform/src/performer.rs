@@ -122,9 +122,9 @@ pub struct Control {
     stop: AtomicBool,
     pause: AtomicBool,
     poll_us: std::sync::atomic::AtomicU64,
-    tempo: Mutex<Option<Tempo>>,
+    tempo: Asked<Tempo>,
     /// A jump asked: its target, and for a start over, when it was asked.
-    jump: Mutex<Option<(u64, Option<u64>)>>,
+    jump: Asked<(u64, Option<u64>)>,
     map: Mutex<Option<TimeMap>>,
 }
 
@@ -180,7 +180,7 @@ impl Control {
 
     /// Play at `tempo` from now on.
     pub fn set_tempo(&self, tempo: Tempo) {
-        *self.tempo.lock().unwrap_or_else(|e| e.into_inner()) = Some(tempo);
+        self.tempo.ask(tempo);
     }
 
     /// Jump to score time `score_us` (µs of the song at its written tempo): every key is
@@ -191,7 +191,7 @@ impl Control {
     /// the jump is taken when the performance resumes. A later jump asked before this one is
     /// taken replaces it.
     pub fn jump_to(&self, score_us: u64) {
-        *self.jump.lock().unwrap_or_else(|e| e.into_inner()) = Some((score_us, None));
+        self.jump.ask((score_us, None));
     }
 
     /// Play from the top (a conductor's Start), asked at wall time `asked_at_us` on the
@@ -201,20 +201,8 @@ impl Control {
     /// resumes (a Start that comes as the performance begins does not play its first notes
     /// twice).
     pub fn start_over(&self, asked_at_us: u64) {
-        *self.jump.lock().unwrap_or_else(|e| e.into_inner()) = Some((0, Some(asked_at_us)));
+        self.jump.ask((0, Some(asked_at_us)));
         self.resume();
-    }
-
-    /// The target of the jump asked and not taken yet, if any.
-    pub fn pending_jump(&self) -> Option<u64> {
-        self.jump
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .map(|j| j.0)
-    }
-
-    fn take_jump(&self) -> Option<(u64, Option<u64>)> {
-        self.jump.lock().unwrap_or_else(|e| e.into_inner()).take()
     }
 
     /// The performance's score ↔ wall time map as it stands (`None` before it starts): where
@@ -226,16 +214,33 @@ impl Control {
     fn publish(&self, map: TimeMap) {
         *self.map.lock().unwrap_or_else(|e| e.into_inner()) = Some(map);
     }
+}
 
-    fn tempo_pending(&self) -> bool {
-        self.tempo
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .is_some()
+/// A request to every performance that shares a control (one per robot): each takes the
+/// latest one it has not seen, by its number.
+#[derive(Debug, Default)]
+struct Asked<T> {
+    latest: Mutex<(u64, Option<T>)>,
+}
+
+impl<T: Copy> Asked<T> {
+    fn ask(&self, value: T) {
+        let mut l = self.latest.lock().unwrap_or_else(|e| e.into_inner());
+        *l = (l.0 + 1, Some(value));
     }
 
-    fn take_tempo(&self) -> Option<Tempo> {
-        self.tempo.lock().unwrap_or_else(|e| e.into_inner()).take()
+    /// The latest request not seen yet (`seen` is the number of the last one seen).
+    fn pending(&self, seen: u64) -> Option<T> {
+        let l = self.latest.lock().unwrap_or_else(|e| e.into_inner());
+        l.1.filter(|_| l.0 > seen)
+    }
+
+    /// [`pending`](Self::pending), marked seen.
+    fn take(&self, seen: &mut u64) -> Option<T> {
+        let l = self.latest.lock().unwrap_or_else(|e| e.into_inner());
+        let v = l.1.filter(|_| l.0 > *seen);
+        *seen = l.0;
+        v
     }
 }
 
@@ -461,6 +466,8 @@ where
     let mut jumps = 0u64;
     // Where the present pass began in the score (0, or the last jump's target).
     let mut pass_from = 0u64;
+    // The numbers of the last tempo and jump asked of the control that this performance took.
+    let (mut seen_tempo, mut seen_jump) = (0u64, 0u64);
     loop {
         if let (Some(c), Some(origin)) = (control, origin.as_ref()) {
             let now = clock.now_us().max(last_at);
@@ -469,7 +476,7 @@ where
             let here = |&(t, asked): &(u64, Option<u64>)| {
                 asked.is_some_and(|a| t == pass_from && planner.time_map().score(a as i64) <= t)
             };
-            if let Some((target, _)) = c.take_jump().filter(|j| !here(j)) {
+            if let Some((target, _)) = c.jump.take(&mut seen_jump).filter(|j| !here(j)) {
                 release_all(&mut out, setup.link, now, &mut robot, &mut ledger)?;
                 last_at = now;
                 last_byte = Some(now);
@@ -495,7 +502,7 @@ where
             }
         }
         if let Some(c) = control {
-            if let Some(t) = c.take_tempo() {
+            if let Some(t) = c.tempo.take(&mut seen_tempo) {
                 let now = clock.now_us() as i64;
                 let old = *planner.time_map();
                 planner.set_tempo(now, t);
@@ -570,7 +577,7 @@ where
                         }
                         robot.drain_presses(|p| ledger.press(p));
                         l(&Live {
-                            song_us: c.pending_jump().unwrap_or(song_us),
+                            song_us: c.jump.pending(seen_jump).map_or(song_us, |j| j.0),
                             keys_down: robot.keys_down(),
                             notes_sent,
                             tempo: planner.time_map().tempo().get(),
@@ -583,7 +590,9 @@ where
                     replan = true;
                     break;
                 }
-                if control.is_some_and(|c| c.tempo_pending() || c.pending_jump().is_some()) {
+                if control.is_some_and(|c| {
+                    c.tempo.pending(seen_tempo).is_some() || c.jump.pending(seen_jump).is_some()
+                }) {
                     replan = true;
                     break;
                 }
@@ -594,7 +603,11 @@ where
                 }
                 clock.wait_until(now + every);
                 l(&Live {
-                    song_us: planner.time_map().score(clock.now_us() as i64),
+                    // In a jump's lead-in, the target.
+                    song_us: planner
+                        .time_map()
+                        .score(clock.now_us() as i64)
+                        .max(pass_from),
                     keys_down: robot.keys_down(),
                     notes_sent,
                     tempo: planner.time_map().tempo().get(),
