@@ -188,8 +188,14 @@ fn jump_keys_in_the_live_view_go_to_the_bar_typed_and_to_the_next() {
     let skipped = number_after(&after, "2:");
     let struck = number_after(&after, "strikes heard");
     let stopped = number_after(&after, "stopped");
+    // A press sent just before `q` is let go at once: struck, with no sound.
+    let silent = if after.contains("struck but no sound") {
+        number_after(&after, "struck but no sound")
+    } else {
+        0.0
+    };
     assert!(skipped >= 16.0, "{after}");
-    assert_eq!(skipped + struck + stopped, 32.0, "{after}");
+    assert_eq!(skipped + struck + stopped + silent, 32.0, "{after}");
 }
 
 #[test]
