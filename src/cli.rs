@@ -176,7 +176,8 @@ pub struct ConductArgs {
     /// The Standard MIDI File.
     pub file: PathBuf,
     /// The conductor: baton:VIDEO (a baton with a red LED, the video's start at the score's),
-    /// tap (the space bar in the live view), midi-clock:IN (raw MIDI bytes with clock 0xF8,
+    /// camera:DEVICE (the same baton seen live by a V4L2 camera such as /dev/video0; built
+    /// with the `camera` feature), tap (the space bar in the live view), midi-clock:IN (raw MIDI bytes with clock 0xF8,
     /// Start, Stop, Continue, Song Position: IN is `-` for standard input, a file, FIFO or
     /// device, or udp:PORT), or osc:PORT (`/orch/tempo f`, `/orch/beat`). UDP listens on 127.0.0.1
     /// unless HOST:PORT is given.
