@@ -4,7 +4,8 @@
 //! `orch conduct` (the binary given as the first argument) plays a piece of quarter notes
 //! written at 240 BPM (one every 250 ms) with `--source osc:PORT --follow immediate`, its
 //! only output `--out udp:127.0.0.1:PORT2`: every MIDI message it sends arrives as a datagram
-//! here, stamped on arrival. The piece steadies at its written tempo; then, 20 ms before a
+//! here, stamped on arrival. The piece steadies at its written tempo; then, 15 to 25 ms (spread
+//! over the samples, so that the performer's 5-ms wake is met at every phase) before a
 //! press is due, this program writes an OSC `/orch/beat 4800.0` (a beat at twenty times the
 //! tempo) on the source's UDP socket. At twenty times the tempo that press is due at once,
 //! so the time from writing the beat to that press's arrival here is the whole path: the
@@ -29,8 +30,11 @@ use orch_perform::conduct::{encode_osc, OscArg};
 
 /// The piece's beat, ms (240 BPM).
 const BEAT_MS: u64 = 250;
-/// How long before a due press the beat is written, ms.
-const AHEAD_MS: u64 = 20;
+/// How long before a due press the beat is written: 15 ms and up to 10 ms more, spread
+/// evenly over the samples (the performer wakes every 5 ms from its last send: a fixed offset
+/// would always meet the same phase of its wake).
+const AHEAD_US: u64 = 15_000;
+const SPREAD_US: u64 = 10_000;
 
 /// A Standard MIDI File: `beats` quarter notes at 240 BPM, one note each, half a beat long.
 fn piece(beats: u32) -> Vec<u8> {
@@ -158,8 +162,9 @@ fn main() {
             last = a;
         }
         let due = last + beat_len;
+        let ahead = AHEAD_US + (latency.len() as u64 * 3_137) % SPREAD_US;
         std::thread::sleep(
-            (due - Duration::from_millis(AHEAD_MS)).saturating_duration_since(Instant::now()),
+            (due - Duration::from_micros(ahead)).saturating_duration_since(Instant::now()),
         );
         let written_at = Instant::now();
         source

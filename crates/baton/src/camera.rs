@@ -78,9 +78,37 @@ pub fn yuyv_to_frame(
     Ok(())
 }
 
-/// Fills `frame` from one Motion JPEG image (a JPEG; the Huffman tables webcams leave out are
-/// the standard ones). Colour and greyscale JPEGs are read; a damaged one is refused.
+/// Whether a JPEG has no Huffman table (DHT segment) before its scan, as Motion JPEG frames
+/// from webcams often have none: they use the standard tables (ITU T.81, K.3).
+fn lacks_huffman_tables(jpeg: &[u8]) -> bool {
+    let mut at = 2;
+    while let (Some(&0xFF), Some(&marker), Some(len)) =
+        (jpeg.get(at), jpeg.get(at + 1), jpeg.get(at + 2..at + 4))
+    {
+        match marker {
+            0xC4 => return false,
+            0xDA => return true,
+            _ => at += 2 + usize::from(u16::from_be_bytes([len[0], len[1]])),
+        }
+    }
+    true
+}
+
+/// The APP0 segment that marks a JPEG as an AVI1 Motion JPEG frame: the decoder then uses the
+/// standard Huffman tables for a frame that has none.
+const AVI1: [u8; 9] = [0xFF, 0xE0, 0x00, 0x07, b'A', b'V', b'I', b'1', 0x00];
+
+/// Fills `frame` from one Motion JPEG image (a JPEG; when it carries no Huffman tables, as
+/// webcams often send it, the standard ones). Colour and greyscale JPEGs are read; a damaged
+/// one is refused.
 pub fn mjpeg_to_frame(frame: &mut Frame, data: &[u8]) -> Result<(), SourceError> {
+    let marked;
+    let data = if data.starts_with(&[0xFF, 0xD8]) && lacks_huffman_tables(data) {
+        marked = [&data[..2], &AVI1[..], &data[2..]].concat();
+        &marked[..]
+    } else {
+        data
+    };
     let mut decoder = jpeg_decoder::Decoder::new(data);
     let pixels = decoder
         .decode()
@@ -142,7 +170,9 @@ impl Camera {
             )));
         }
         let device = Device::with_path(path).map_err(|e| {
-            SourceError::BadInput(format!("camera {name}: cannot open it as a V4L2 device: {e}"))
+            SourceError::BadInput(format!(
+                "camera {name}: cannot open it as a V4L2 device: {e}"
+            ))
         })?;
         let refused = |what: &str, e: std::io::Error| {
             SourceError::BadInput(format!("camera {name}: {what}: {e}"))
@@ -304,8 +334,16 @@ mod tests {
             let mut frame = Frame::default();
             mjpeg_to_frame(&mut frame, data).unwrap();
             assert_eq!((frame.width, frame.height), (16, 8));
-            assert!(near(frame.pixel(2, 4), [255, 0, 0]), "{:?}", frame.pixel(2, 4));
-            assert!(near(frame.pixel(13, 4), [0, 0, 255]), "{:?}", frame.pixel(13, 4));
+            assert!(
+                near(frame.pixel(2, 4), [255, 0, 0]),
+                "{:?}",
+                frame.pixel(2, 4)
+            );
+            assert!(
+                near(frame.pixel(13, 4), [0, 0, 255]),
+                "{:?}",
+                frame.pixel(13, 4)
+            );
         }
         let mut frame = Frame::default();
         assert!(mjpeg_to_frame(&mut frame, &jpeg[..jpeg.len() / 2]).is_err());
@@ -319,6 +357,9 @@ mod tests {
         };
         let m = e.to_string();
         assert!(matches!(e, SourceError::BadInput(_)));
-        assert!(m.contains("/dev/video-orch-none") && m.contains("no such device"), "{m}");
+        assert!(
+            m.contains("/dev/video-orch-none") && m.contains("no such device"),
+            "{m}"
+        );
     }
 }
