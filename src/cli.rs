@@ -94,6 +94,10 @@ pub struct PlayArgs {
     /// Tempo factor: 2 plays twice as fast, 0.5 half as fast.
     #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
     pub tempo: f64,
+    /// Start at this bar (from 1, as the view counts bars); the notes before it are counted
+    /// skipped.
+    #[arg(long, value_name = "BAR")]
+    pub from: Option<u32>,
     /// No live terminal view (it is off anyway when the output is not a terminal).
     #[arg(long)]
     pub no_view: bool,
@@ -180,15 +184,20 @@ pub struct ConductArgs {
     /// The Standard MIDI File.
     pub file: PathBuf,
     /// The conductor: baton:VIDEO (a baton with a red LED, the video's start at the score's),
-    /// tap (the space bar in the live view), midi-clock:IN (raw MIDI bytes with clock 0xF8,
-    /// Start, Stop, Continue: IN is `-` for standard input, a file, FIFO or device, or
-    /// udp:PORT), or osc:PORT (`/orch/tempo f`, `/orch/beat`). UDP listens on 127.0.0.1
+    /// camera:DEVICE (the same baton seen live by a V4L2 camera such as /dev/video0; built
+    /// with the `camera` feature), tap (the space bar in the live view), midi-clock:IN (raw MIDI bytes with clock 0xF8,
+    /// Start, Stop, Continue, Song Position: IN is `-` for standard input, a file, FIFO or
+    /// device, or udp:PORT), or osc:PORT (`/orch/tempo f`, `/orch/beat`). UDP listens on 127.0.0.1
     /// unless HOST:PORT is given.
     #[arg(long, value_name = "SOURCE")]
     pub source: String,
     /// Follow the conductor's rate only (immediate), or also pull the phase toward each beat.
     #[arg(long, value_enum, default_value_t = FollowMode::Phase)]
     pub follow: FollowMode,
+    /// Start at this bar (from 1, as the view counts bars); the notes before it are counted
+    /// skipped.
+    #[arg(long, value_name = "BAR")]
+    pub from: Option<u32>,
     /// The robot's configuration (see `orch config`); the thesis's robot if not given.
     #[arg(long, value_name = "FILE")]
     pub robot: Option<PathBuf>,

@@ -28,7 +28,10 @@ pub enum SourceSpec {
     /// `baton:VIDEO`: a video of a baton with a red LED, played in real time from the score's
     /// start.
     Baton(PathBuf),
-    /// `tap`: the space bar (or any key but q) in the live view.
+    /// `camera:DEVICE`: a live camera (V4L2) watching a baton with a red LED; needs the
+    /// `camera` feature.
+    Camera(PathBuf),
+    /// `tap`: the space bar (or any key but q, Esc and the jump keys) in the live view.
     Tap,
     /// `midi-clock:IN`: raw MIDI bytes carrying clock.
     MidiClock(ClockIn),
@@ -62,11 +65,12 @@ impl SourceSpec {
             return Ok(SourceSpec::Tap);
         }
         let (kind, rest) = s.split_once(':').ok_or_else(|| {
-            format!("--source {s}: give baton:VIDEO, tap, midi-clock:IN or osc:PORT")
+            format!("--source {s}: give baton:VIDEO, camera:DEVICE, tap, midi-clock:IN or osc:PORT")
         })?;
         let bad = |m: String| format!("--source {s}: {m}");
         match kind {
             "baton" if !rest.is_empty() => Ok(SourceSpec::Baton(PathBuf::from(rest))),
+            "camera" if !rest.is_empty() => Ok(SourceSpec::Camera(PathBuf::from(rest))),
             "midi-clock" => Ok(SourceSpec::MidiClock(match rest {
                 "-" => ClockIn::Stdin,
                 r if r.starts_with("udp:") => ClockIn::Udp(udp_addr(&r[4..]).map_err(bad)?),
@@ -75,7 +79,7 @@ impl SourceSpec {
             })),
             "osc" => Ok(SourceSpec::Osc(udp_addr(rest).map_err(bad)?)),
             _ => Err(format!(
-                "--source {s}: give baton:VIDEO, tap, midi-clock:IN or osc:PORT"
+                "--source {s}: give baton:VIDEO, camera:DEVICE, tap, midi-clock:IN or osc:PORT"
             )),
         }
     }
@@ -168,6 +172,9 @@ impl TempoSource for Datagrams {
 /// a cue at its ictus (the video's time 0 being the score's time 0 on the performer's clock).
 struct BatonVideo {
     frames: Box<dyn FrameSource>,
+    /// A live camera: frames come when they come (its time 0 is its first frame's arrival);
+    /// a file is played in real time from the score's start.
+    live: bool,
     baton: Baton,
     frame: Frame,
     control: Arc<Control>,
@@ -179,6 +186,23 @@ impl TempoSource for BatonVideo {
     fn next_cue(&mut self) -> Result<Option<Timed>, ConductError> {
         let start = match self.start_us {
             Some(s) => s,
+            None if self.live => {
+                // The first frame's arrival is the camera's time 0.
+                let Some(t_ms) = self
+                    .frames
+                    .next_frame(&mut self.frame)
+                    .map_err(|e| ConductError::Input(e.to_string()))?
+                else {
+                    return Ok(None);
+                };
+                let s = self
+                    .stamp
+                    .now_us()
+                    .saturating_sub((t_ms * 1000.0).round() as u64);
+                self.start_us = Some(s);
+                self.baton.push(t_ms, &self.frame);
+                s
+            }
             None => loop {
                 if let Some(m) = self.control.time_map() {
                     let s = m.wall(0).max(0) as u64;
@@ -196,10 +220,10 @@ impl TempoSource for BatonVideo {
             else {
                 return Ok(None);
             };
-            // The frame is seen when it is taken, not before.
+            // A file's frame is seen when it is taken, not before.
             let due = start + (t_ms * 1000.0).round() as u64;
             let now = self.stamp.now_us();
-            if due > now {
+            if !self.live && due > now {
                 std::thread::sleep(Duration::from_micros(due - now));
             }
             if let Some(b) = self.baton.push(t_ms, &self.frame) {
@@ -293,12 +317,7 @@ pub fn follow(
         let action = follower.cue(&cue.cue, control.time_map().as_ref());
         let bpm = follower.bpm();
         let is_beat = matches!(cue.cue, Cue::Beat { .. });
-        match action {
-            Action::Tempo(t) => control.set_tempo(t),
-            Action::Pause => control.pause(),
-            Action::Resume => control.resume(),
-            Action::Nothing => {}
-        }
+        action.apply(control, cue.t_us);
         set(&|s| {
             s.beats += u64::from(is_beat);
             s.bpm = bpm.or(s.bpm);
@@ -325,6 +344,7 @@ fn open_source(
             })?;
             Box::new(BatonVideo {
                 frames,
+                live: false,
                 baton: Baton::default(),
                 frame: Frame::default(),
                 control: Arc::clone(control),
@@ -332,6 +352,15 @@ fn open_source(
                 stamp,
             })
         }
+        SourceSpec::Camera(device) => Box::new(BatonVideo {
+            frames: open_camera(device)?,
+            live: true,
+            baton: Baton::default(),
+            frame: Frame::default(),
+            control: Arc::clone(control),
+            start_us: None,
+            stamp,
+        }),
         SourceSpec::Tap => Box::new(Taps {
             rx: taps.expect("tap has its channel"),
             tap: TapTempo::new(),
@@ -366,6 +395,23 @@ fn open_source(
     })
 }
 
+/// A live camera, with the `camera` feature.
+#[cfg(feature = "camera")]
+fn open_camera(device: &Path) -> anyhow::Result<Box<dyn FrameSource>> {
+    orch_baton::camera::Camera::open(device)
+        .map(|c| Box::new(c) as Box<dyn FrameSource>)
+        .map_err(|e| bad_input(format!("--source camera: {e}")))
+}
+
+/// Without the `camera` feature: said, naming the device.
+#[cfg(not(feature = "camera"))]
+fn open_camera(device: &Path) -> anyhow::Result<Box<dyn FrameSource>> {
+    Err(bad_input(format!(
+        "--source camera:{}: this orch was built without the `camera` feature (V4L2);          build it with `cargo build --release --features camera`",
+        device.display()
+    )))
+}
+
 /// Runs `orch conduct`.
 pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
     play::init_logging(args.verbose);
@@ -378,6 +424,7 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
         ));
     }
     let song = play::load_song(&args.file)?;
+    let from_us = play::from_bar(&song, args.from)?;
     let robot = play::load_robot(args.robot.as_deref())?;
     let setup = play::setup(&robot, !args.no_compensation, Tempo::NORMAL);
     let lanes = play::open_lanes(play::out_specs(&args.outs)?, &setup)?;
@@ -425,6 +472,8 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
         song,
         lanes,
         LiveOptions {
+            command: "orch conduct",
+            from_us,
             view: !args.no_view,
             file: &args.file,
             conductor: Some(Conductor {
@@ -448,6 +497,7 @@ fn source_name(spec: &SourceSpec) -> String {
     };
     match spec {
         SourceSpec::Baton(p) => format!("baton {}", file(p)),
+        SourceSpec::Camera(p) => format!("camera {}", p.display()),
         SourceSpec::Tap => "tap (space)".into(),
         SourceSpec::MidiClock(ClockIn::Stdin) => "MIDI clock on stdin".into(),
         SourceSpec::MidiClock(ClockIn::File(p)) => format!("MIDI clock {}", file(p)),
@@ -468,6 +518,10 @@ mod tests {
             Ok(SourceSpec::Baton("v.y4m".into()))
         );
         assert_eq!(
+            SourceSpec::parse("camera:/dev/video0"),
+            Ok(SourceSpec::Camera("/dev/video0".into()))
+        );
+        assert_eq!(
             SourceSpec::parse("midi-clock:-"),
             Ok(SourceSpec::MidiClock(ClockIn::Stdin))
         );
@@ -486,6 +540,7 @@ mod tests {
             "osc:",
             "osc:x",
             "baton:",
+            "camera:",
             "midi-clock:",
             "clock:3",
             "midi-clock:udp:70000",

@@ -4,8 +4,10 @@
 //! Host I/O lives here: reading files and standard input, the robot configuration, the live
 //! terminal view, and the engine that drives the core onto the virtual robot.
 //!
-//! Cargo feature `alsa` (off by default): `orch play --out alsa:CLIENT:PORT`, through
-//! orch-io's own `alsa` feature; it links alsa-lib (`libasound2-dev` to build).
+//! Cargo features, off by default: `alsa`, `orch play --out alsa:CLIENT:PORT`, through
+//! orch-io's own `alsa` feature (it links alsa-lib: `libasound2-dev` to build); `camera`,
+//! `orch conduct --source camera:/dev/video0`, through orch-baton's own `camera` feature (a
+//! V4L2 camera; the `v4l` crate's bindings are generated with libclang: `libclang-dev`).
 
 pub mod baton;
 pub mod cli;

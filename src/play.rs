@@ -99,6 +99,7 @@ fn uncompensated(song: &Song, setup: &Setup) -> anyhow::Result<Option<Spread>> {
 pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
     init_logging(args.verbose);
     let song = load_song(&args.file)?;
+    let from_us = from_bar(&song, args.from)?;
     let robot = load_robot(args.robot.as_deref())?;
     let mut setup = setup(&robot, !args.no_compensation, tempo(args.tempo)?);
     if args.writes.is_some() {
@@ -128,13 +129,19 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
             .into_iter()
             .map(|l| {
                 let (events, notes) = lane_events(&song, l.spec.channels);
+                // From a bar: a jump there before the first note.
+                let control = from_us.map(|t| {
+                    let c = Control::new();
+                    c.jump_to(t);
+                    c
+                });
                 let played = perform::<_, Output>(
                     &l.setup,
                     events.into_iter(),
                     notes,
                     None,
                     &mut VirtualClock::new(),
-                    None,
+                    control.as_deref(),
                     None,
                 )?;
                 Ok((l.spec, played, None))
@@ -142,8 +149,10 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
             .collect::<anyhow::Result<_>>()?
     } else {
         let live = LiveOptions {
+            command: "orch play",
             view: !args.no_view,
             file: &args.file,
+            from_us,
             conductor: None,
         };
         play_live(song, lanes, live)?
@@ -195,8 +204,78 @@ pub(crate) fn open_lanes(specs: Vec<OutSpec>, setup: &Setup) -> anyhow::Result<V
     Ok(lanes)
 }
 
+/// `--from BAR`: where bar `bar` begins, µs of score time; bad input (exit 2) for a bar the
+/// song does not have.
+pub(crate) fn from_bar(song: &Song, bar: Option<u32>) -> anyhow::Result<Option<u64>> {
+    let Some(bar) = bar else {
+        return Ok(None);
+    };
+    bar_start(song, bar).map(Some).ok_or_else(|| {
+        bad_input(format!(
+            "--from {bar}: the song has bars 1 to {}",
+            last_bar(song)
+        ))
+    })
+}
+
+/// The song's last bar (the bar of its last instant).
+fn last_bar(song: &Song) -> u32 {
+    song.bar_beat(song.duration_us().saturating_sub(1)).0
+}
+
+/// Where bar `bar` begins, if the song has it.
+fn bar_start(song: &Song, bar: u32) -> Option<u64> {
+    (1..=last_bar(song))
+        .contains(&bar)
+        .then(|| song.bar_start_us(bar))
+        .flatten()
+}
+
+/// The jump keys of the live view: digits and Enter jump to the bar typed (Backspace takes a
+/// digit back), `[` to the bar before the one playing, `]` to the next. Returns the jump's
+/// target, µs of score time, if a key asks for one (a bar the song does not have asks for
+/// nothing).
+pub(crate) fn jump_key(
+    key: crate::view::Key,
+    typed: &mut String,
+    bar_now: u32,
+    song: &Song,
+) -> Option<u64> {
+    use crate::view::Key;
+    match key {
+        Key::Char(c @ '0'..='9') if typed.len() < 6 => {
+            typed.push(c);
+            None
+        }
+        Key::Backspace => {
+            typed.pop();
+            None
+        }
+        Key::Enter => {
+            let bar = std::mem::take(typed).parse().ok()?;
+            bar_start(song, bar)
+        }
+        Key::Char('[') => bar_start(song, bar_now.saturating_sub(1).max(1)),
+        Key::Char(']') => bar_start(song, bar_now.saturating_add(1)),
+        _ => None,
+    }
+}
+
+/// Whether a key is one of the live view's jump keys.
+pub(crate) fn is_jump_key(key: crate::view::Key) -> bool {
+    use crate::view::Key;
+    matches!(
+        key,
+        Key::Char('0'..='9' | '[' | ']') | Key::Enter | Key::Backspace
+    )
+}
+
 /// How a live performance is shown and steered.
 pub(crate) struct LiveOptions<'a> {
+    /// The command that runs, for the view's head.
+    pub command: &'static str,
+    /// `--from`: start at this score time (µs), a jump before the first note.
+    pub from_us: Option<u64>,
     /// The live view, if standard output is a terminal.
     pub view: bool,
     /// The file played (its name is the view's title).
@@ -308,6 +387,8 @@ pub(crate) fn play_live(
     options: LiveOptions<'_>,
 ) -> anyhow::Result<Vec<(OutSpec, Played, Option<OutStats>)>> {
     let LiveOptions {
+        command,
+        from_us,
         view: show,
         file,
         mut conductor,
@@ -321,6 +402,9 @@ pub(crate) fn play_live(
         Some(c) => (Arc::clone(&c.control), c.origin),
         None => (Control::new(), std::time::Instant::now()),
     };
+    if let Some(t) = from_us {
+        control.jump_to(t);
+    }
     let song = Arc::new(song);
     let (low, tempo) = match lanes.first() {
         Some(l) => (l.setup.config.range.low().get(), l.setup.tempo),
@@ -361,19 +445,32 @@ pub(crate) fn play_live(
         let mut view = if show { Some(View::start()?) } else { None };
         let total_s = song.duration_us() as f64 / 1e6 / tempo.get();
         let mut view_error = None;
+        // The bar being typed, and the bar playing (for `[` and `]`).
+        let mut typed = String::new();
+        let mut bar_now = 1;
         while !senders.iter().all(|(_, s, _)| s.is_finished()) {
             if signalled.load(Ordering::SeqCst) {
                 control.stop();
             }
             if let Some(v) = view.as_mut() {
-                let on_key: Option<&mut dyn FnMut(char)> = match conductor.as_mut() {
-                    Some(c) => Some(&mut *c.on_key),
-                    None => None,
+                let mut on_key = |key: crate::view::Key| {
+                    if is_jump_key(key) {
+                        if let Some(t) = jump_key(key, &mut typed, bar_now, &song) {
+                            control.jump_to(t);
+                        }
+                    } else if let (Some(c), crate::view::Key::Char(ch)) = (conductor.as_mut(), key)
+                    {
+                        (c.on_key)(ch);
+                    }
                 };
-                if crate::view::keys(on_key) {
+                // Drawn every 20 ms; a key is taken as it comes.
+                if crate::view::keys(Some(&mut on_key), Duration::from_millis(20)) {
                     control.stop();
                 }
                 if let Some(mut scene) = scene(&senders, &song, &title, low, total_s, notes_total) {
+                    bar_now = scene.bar;
+                    scene.command = command;
+                    scene.prompt = (!typed.is_empty()).then(|| typed.clone());
                     if let Some(c) = &conductor {
                         scene.conductor = Some((c.status)());
                     }
@@ -470,7 +567,7 @@ fn scene(
         total_s,
         notes_sent: sent,
         notes,
-        conductor: None,
+        ..Scene::default()
     })
 }
 

@@ -598,6 +598,7 @@ impl Runner {
     fn scene(&self, title: &str) -> Scene {
         let range = self.interp.config().range;
         Scene {
+            command: "orch run",
             title: title.to_string(),
             low_note: range.low().get(),
             down: (0..range.keys())

@@ -1,5 +1,5 @@
-//! The live terminal view of `orch play`: the keyboard with pressed keys lit, bar and beat,
-//! tempo, and progress.
+//! The live terminal view of `orch play`, `orch conduct` and `orch run`: the keyboard with
+//! pressed keys lit, bar and beat, tempo, and progress.
 
 use std::io;
 
@@ -12,6 +12,8 @@ use ratatui::{DefaultTerminal, Frame};
 /// What the view shows at one moment.
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
+    /// The command that runs, as its head says: `orch play`, `orch conduct`, `orch run`.
+    pub command: &'static str,
     pub title: String,
     /// The note of the lowest key.
     pub low_note: u8,
@@ -26,6 +28,8 @@ pub struct Scene {
     pub notes: u64,
     /// `orch conduct`: the conductor's beats and tempo, a line under the head.
     pub conductor: Option<String>,
+    /// A bar being typed to jump to (digits, then Enter), shown at the end of the head.
+    pub prompt: Option<String>,
 }
 
 const NAMES: [&str; 12] = [
@@ -67,24 +71,39 @@ impl View {
 /// Whether the person at the terminal asked to stop (q, Esc or Ctrl-C; the view's raw mode
 /// turns Ctrl-C into a key press).
 pub fn quit_requested() -> bool {
-    keys(None)
+    keys(None, std::time::Duration::ZERO)
 }
 
-/// Reads the keys pressed: whether one asks to stop (as [`quit_requested`]); every other
-/// character key goes to `other` (the tap key of `orch conduct`).
-pub fn keys(mut other: Option<&mut dyn FnMut(char)>) -> bool {
+/// A key pressed in the view, other than those that stop it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Key {
+    Char(char),
+    Enter,
+    Backspace,
+}
+
+/// Reads the keys pressed, waiting up to `wait` for the first (a key is taken the moment it
+/// comes, so a tap's time is its own): whether one asks to stop (as [`quit_requested`]);
+/// every other character key, Enter and Backspace go to `other` (the jump keys of a live
+/// performance, the tap key of `orch conduct`).
+pub fn keys(mut other: Option<&mut dyn FnMut(Key)>, mut wait: std::time::Duration) -> bool {
     use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
-    while event::poll(std::time::Duration::ZERO).unwrap_or(false) {
+    while event::poll(wait).unwrap_or(false) {
+        wait = std::time::Duration::ZERO;
         if let Ok(Event::Key(k)) = event::read() {
             let ctrl_c =
                 k.code == KeyCode::Char('c') && k.modifiers.contains(KeyModifiers::CONTROL);
             if ctrl_c || matches!(k.code, KeyCode::Char('q') | KeyCode::Esc) {
                 return true;
             }
-            if let (KeyCode::Char(c), Some(f), KeyEventKind::Press) =
-                (k.code, other.as_deref_mut(), k.kind)
-            {
-                f(c);
+            let key = match k.code {
+                KeyCode::Char(c) => Key::Char(c),
+                KeyCode::Enter => Key::Enter,
+                KeyCode::Backspace => Key::Backspace,
+                _ => continue,
+            };
+            if let (Some(f), KeyEventKind::Press) = (other.as_deref_mut(), k.kind) {
+                f(key);
             }
         }
     }
@@ -106,13 +125,23 @@ fn render(f: &mut Frame, s: &Scene) {
         Constraint::Length(1),
     ])
     .areas(f.area());
-    let head_line = Line::from(vec![
-        Span::styled("orch play ", Style::default().add_modifier(Modifier::BOLD)),
+    let mut head_spans = vec![
+        Span::styled(
+            format!("{} ", s.command),
+            Style::default().add_modifier(Modifier::BOLD),
+        ),
         Span::raw(format!(
             "{}   bar {} beat {}   {:.1} bpm   notes {}/{}",
             s.title, s.bar, s.beat, s.bpm, s.notes_sent, s.notes
         )),
-    ]);
+    ];
+    if let Some(p) = &s.prompt {
+        head_spans.push(Span::styled(
+            format!("   go to bar {p}_"),
+            Style::default().fg(Color::Yellow),
+        ));
+    }
+    let head_line = Line::from(head_spans);
     f.render_widget(Paragraph::new(head_line), head);
     if let Some(c) = &s.conductor {
         f.render_widget(Paragraph::new(c.as_str()), conductor);
@@ -185,6 +214,7 @@ mod tests {
         down[24] = true;
         down[28] = true;
         let scene = Scene {
+            command: "orch conduct",
             title: "t.mid".into(),
             low_note: 36,
             down,
@@ -196,6 +226,7 @@ mod tests {
             notes_sent: 5,
             notes: 10,
             conductor: Some("conductor: beat 7, 96.0 BPM".into()),
+            prompt: Some("12".into()),
         };
         t.draw(|f| render(f, &scene)).unwrap();
         let text: String = t
@@ -205,6 +236,8 @@ mod tests {
             .iter()
             .map(|c| c.symbol())
             .collect();
+        assert!(text.contains("orch conduct t.mid"), "{text}");
+        assert!(text.contains("go to bar 12_"), "{text}");
         assert!(text.contains("bar 3 beat 2"), "{text}");
         assert!(text.contains("conductor: beat 7, 96.0 BPM"), "{text}");
         assert!(text.contains("down: C4 E4"), "{text}");

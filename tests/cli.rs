@@ -571,6 +571,47 @@ fn play_writes_lists_every_board_write_of_the_performance() {
 }
 
 #[test]
+fn play_from_a_bar_starts_there_and_counts_the_notes_before_it_skipped() {
+    let file = corpus("joplin-maple-leaf-rag.mid");
+    let song = orch_seq::Song::parse(&std::fs::read(&file).unwrap()).unwrap();
+    let from = song.bar_start_us(9).unwrap();
+    assert_eq!(song.bar_beat(from), (9, 1));
+    let before = song
+        .events()
+        .iter()
+        .filter(|e| e.time_us < from && e.bytes.note_on().is_some())
+        .count() as u64;
+    assert!(before > 100);
+    let out = orch()
+        .args(["play", "--fast", "--json", "--from", "9"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let o = &r["outcomes"];
+    let n = |v: &Value| v.as_u64().unwrap();
+    assert_eq!(n(&o["skipped"]), before, "{r}");
+    assert_eq!((n(&r["jumps"]), n(&r["replayed"])), (1, 0));
+    let dropped: u64 = o["dropped"].as_object().unwrap().values().map(n).sum();
+    let played: u64 = ["on_time", "late", "early", "unison", "joined"]
+        .iter()
+        .map(|k| n(&o[*k]))
+        .sum();
+    assert_eq!(played + dropped + before, 2308, "{r}");
+    assert_eq!(dropped, 0, "{r}");
+    for bad in ["0", "100000"] {
+        let out = orch()
+            .args(["play", "--fast", "--from", bad])
+            .arg(&file)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{bad}: {out:?}");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("--from"));
+    }
+}
+
+#[test]
 fn analyze_says_what_will_go_wrong() {
     let out = orch()
         .arg("analyze")

@@ -298,7 +298,14 @@ fn osc_tempo_over_udp_sets_the_tempo() {
 fn bad_sources_exit_2() {
     let file = scratch("bad.mid");
     std::fs::write(&file, quarters_smf(2, 60.0)).unwrap();
-    for source in ["nothing", "osc:notaport", "baton:/nonexistent.y4m", "tap"] {
+    for source in [
+        "nothing",
+        "osc:notaport",
+        "baton:/nonexistent.y4m",
+        "tap",
+        // Built with the camera feature or not: refused, naming the device.
+        "camera:/dev/video-orch-none",
+    ] {
         let out = Command::new(env!("CARGO_BIN_EXE_orch"))
             .args([
                 "conduct",

@@ -1,8 +1,9 @@
-//! The live view of `orch play`, in a real pseudo-terminal (tmux), shows the pressed keys.
+//! The live view in a real pseudo-terminal (tmux): `orch play` shows the pressed keys and
+//! jumps to a bar typed; `orch conduct --source tap` follows the taps of the space bar.
 
-use std::process::Command;
+use std::process::{Command, Output};
 use std::thread::sleep;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// A one-track SMF: 480 ticks a quarter at 120 bpm; C4 E4 G4 held from 0.5 s to 3.5 s.
 fn chord_file() -> Vec<u8> {
@@ -28,51 +29,211 @@ fn chord_file() -> Vec<u8> {
     smf
 }
 
-#[test]
-fn live_view_under_a_pseudo_terminal_lights_the_pressed_keys_and_q_stops_it() {
-    assert!(
-        Command::new("tmux").arg("-V").output().is_ok(),
-        "tmux is needed for this test; scripts/test.sh installs it"
-    );
-    let dir = std::env::temp_dir().join(format!("orch-view-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("chord.mid");
-    std::fs::write(&file, chord_file()).unwrap();
-    let socket = format!("orch-view-test-{}", std::process::id());
-    let tmux = |args: &[&str]| {
+/// A one-track SMF: `beats` quarter notes at `bpm` (480 ticks a quarter, 4/4), one note each,
+/// half a beat long.
+fn quarters_file(beats: u32, bpm: f64) -> Vec<u8> {
+    let mut trk = vec![0x00, 0xFF, 0x51, 0x03];
+    trk.extend_from_slice(&((60e6 / bpm).round() as u32).to_be_bytes()[1..]);
+    for i in 0..beats {
+        let n = 48 + (i % 24) as u8;
+        let delta: &[u8] = if i == 0 { &[0x00] } else { &[0x81, 0x70] };
+        trk.extend_from_slice(delta);
+        trk.extend_from_slice(&[0x90, n, 100, 0x81, 0x70, 0x80, n, 0]);
+    }
+    trk.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
+    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
+    smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
+    smf.extend_from_slice(&trk);
+    smf
+}
+
+/// A tmux server of its own running one command in a 100×30 pseudo-terminal; killed on drop.
+struct Tmux {
+    socket: String,
+}
+
+impl Tmux {
+    fn start(name: &str, command: &str) -> Self {
+        assert!(
+            Command::new("tmux").arg("-V").output().is_ok(),
+            "tmux is needed for this test; scripts/test.sh installs it"
+        );
+        let t = Tmux {
+            socket: format!("orch-{name}-{}", std::process::id()),
+        };
+        let started = t.run(&["new-session", "-d", "-x", "100", "-y", "30", command]);
+        assert!(
+            started.status.success(),
+            "{}",
+            String::from_utf8_lossy(&started.stderr)
+        );
+        t
+    }
+
+    fn run(&self, args: &[&str]) -> Output {
         Command::new("tmux")
-            .args(["-L", &socket, "-f", "/dev/null"])
+            .args(["-L", &self.socket, "-f", "/dev/null"])
             .args(args)
             .env("TERM", "xterm-256color")
             .output()
             .unwrap()
-    };
-    let command = format!(
-        "{} play {}; sleep 10",
-        env!("CARGO_BIN_EXE_orch"),
-        file.display()
-    );
-    let started = tmux(&["new-session", "-d", "-x", "100", "-y", "30", &command]);
-    assert!(
-        started.status.success(),
-        "{}",
-        String::from_utf8_lossy(&started.stderr)
+    }
+
+    fn screen(&self) -> String {
+        String::from_utf8_lossy(&self.run(&["capture-pane", "-p"]).stdout).into_owned()
+    }
+
+    fn keys(&self, keys: &str) {
+        self.run(&["send-keys", keys]);
+    }
+
+    /// The screen once it shows `text`, polled every 20 ms for up to `within`.
+    fn wait_for(&self, text: &str, within: Duration) -> String {
+        let t0 = Instant::now();
+        loop {
+            let screen = self.screen();
+            if screen.contains(text) {
+                return screen;
+            }
+            assert!(
+                t0.elapsed() < within,
+                "no {text:?} within {within:?}: {screen}"
+            );
+            sleep(Duration::from_millis(20));
+        }
+    }
+}
+
+impl Drop for Tmux {
+    fn drop(&mut self) {
+        self.run(&["kill-server"]);
+    }
+}
+
+fn scratch(name: &str, bytes: &[u8]) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("orch-view-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join(name);
+    std::fs::write(&file, bytes).unwrap();
+    file
+}
+
+/// The number after `label` on the screen.
+fn number_after(screen: &str, label: &str) -> f64 {
+    let at = screen
+        .find(label)
+        .unwrap_or_else(|| panic!("no {label:?}: {screen}"))
+        + label.len();
+    let s: String = screen[at..]
+        .trim_start()
+        .chars()
+        .take_while(|c| c.is_ascii_digit() || *c == '.')
+        .collect();
+    s.parse()
+        .unwrap_or_else(|_| panic!("{label:?} {s:?}: {screen}"))
+}
+
+#[test]
+fn live_view_under_a_pseudo_terminal_lights_the_pressed_keys_and_q_stops_it() {
+    let file = scratch("chord.mid", &chord_file());
+    let tmux = Tmux::start(
+        "view",
+        &format!(
+            "{} play {}; sleep 10",
+            env!("CARGO_BIN_EXE_orch"),
+            file.display()
+        ),
     );
     sleep(Duration::from_millis(2000));
-    let screen = String::from_utf8_lossy(&tmux(&["capture-pane", "-p"]).stdout).into_owned();
+    let screen = tmux.screen();
     // `q` stops the performance early: the terminal comes back and the report is printed.
-    tmux(&["send-keys", "q"]);
-    sleep(Duration::from_millis(1500));
-    let after = String::from_utf8_lossy(&tmux(&["capture-pane", "-p"]).stdout).into_owned();
-    tmux(&["kill-server"]);
+    tmux.keys("q");
+    let after = tmux.wait_for("notes in the file", Duration::from_secs(5));
     assert!(after.contains("notes in the file      3"), "{after}");
     assert!(
         !after.contains("cut by the watchdog"),
         "stopping is not a watchdog cut: {after}"
     );
     assert!(!after.contains("down: "), "the view is gone: {after}");
-    assert!(screen.contains("orch play"), "{screen}");
+    assert!(screen.contains("orch play chord.mid"), "{screen}");
     assert!(screen.contains("down: C4 E4 G4"), "{screen}");
     assert!(screen.contains("bar 1 beat"), "{screen}");
     assert!(screen.contains("61 keys"), "{screen}");
+}
+
+#[test]
+fn jump_keys_in_the_live_view_go_to_the_bar_typed_and_to_the_next() {
+    // Eight bars of four quarters at 120 BPM: 16 s, a note on every beat.
+    let file = scratch("bars.mid", &quarters_file(32, 120.0));
+    let tmux = Tmux::start(
+        "jump",
+        &format!(
+            "{} play {}; sleep 30",
+            env!("CARGO_BIN_EXE_orch"),
+            file.display()
+        ),
+    );
+    tmux.wait_for("bar 1 beat", Duration::from_secs(10));
+    tmux.keys("6");
+    tmux.wait_for("go to bar 6_", Duration::from_secs(2));
+    tmux.keys("Enter");
+    let at6 = tmux.wait_for("bar 6 beat 1", Duration::from_secs(2));
+    assert!(!at6.contains("go to bar"), "{at6}");
+    tmux.keys("]");
+    tmux.wait_for("bar 7 beat 1", Duration::from_secs(2));
+    tmux.keys("q");
+    let after = tmux.wait_for("notes in the file", Duration::from_secs(5));
+    assert!(after.contains("jumps                  2:"), "{after}");
+    // Every note before bar 7 that did not sound was skipped; nothing was dropped.
+    let skipped = number_after(&after, "2:");
+    let struck = number_after(&after, "strikes heard");
+    let stopped = number_after(&after, "stopped");
+    // A press sent just before `q` is let go at once: struck, with no sound.
+    let silent = if after.contains("struck but no sound") {
+        number_after(&after, "struck but no sound")
+    } else {
+        0.0
+    };
+    assert!(skipped >= 16.0, "{after}");
+    assert_eq!(skipped + struck + stopped + silent, 32.0, "{after}");
+}
+
+#[test]
+fn tap_tempo_in_a_pseudo_terminal_sets_the_tempo_the_taps_give() {
+    // 24 quarters written at 60 BPM (24 s); tapped at 240 BPM, four times as fast.
+    let file = scratch("taps.mid", &quarters_file(24, 60.0));
+    let tmux = Tmux::start(
+        "tap",
+        &format!(
+            "{} conduct {} --source tap --follow immediate; sleep 30",
+            env!("CARGO_BIN_EXE_orch"),
+            file.display()
+        ),
+    );
+    tmux.wait_for("conductor tap", Duration::from_secs(10));
+    let t0 = Instant::now();
+    let mut sent = Vec::new();
+    for i in 0..9u32 {
+        sleep((t0 + Duration::from_millis(250) * i).saturating_duration_since(Instant::now()));
+        sent.push(Instant::now());
+        tmux.keys("Space");
+    }
+    // The taps' own tempo: the last four intervals.
+    let tapped = 60.0 * 4.0 / (sent[8] - sent[4]).as_secs_f64();
+    let screen = tmux.wait_for("9 beats", Duration::from_secs(2));
+    assert!(screen.contains("orch conduct taps.mid"), "{screen}");
+    let bpm = number_after(&screen, "9 beats,");
+    let factor = number_after(&screen, "tempo x");
+    assert!(
+        (bpm - tapped).abs() < 0.08 * tapped,
+        "{bpm} BPM, tapped {tapped}: {screen}"
+    );
+    assert!(
+        (factor - bpm / 60.0).abs() < 0.01,
+        "{factor} at {bpm} BPM: {screen}"
+    );
+    // The rest plays four times as fast: 24 s as written ends within about 8 s.
+    tmux.wait_for("notes in the file", Duration::from_secs(12));
+    let took = t0.elapsed().as_secs_f64();
+    assert!(took < 10.0, "{took} s");
 }

@@ -54,12 +54,19 @@
 //!
 //! ## Cargo features
 //!
-//! None. (`png` and `y4m` are plain dependencies: pure Rust, no system library.)
+//! - `camera` (off by default): [`camera::Camera`], a live camera through Video4Linux2
+//!   (`/dev/video0`), YUYV or Motion JPEG converted to the tracker's frames. It builds the
+//!   `v4l` crate, whose kernel bindings are generated at build time with libclang
+//!   (`libclang-dev` on Debian); no libv4l is linked.
+//!
+//! `png` and `y4m` are plain dependencies: pure Rust, no system library.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod beat;
 pub mod blob;
+#[cfg(feature = "camera")]
+pub mod camera;
 pub mod frame;
 pub mod source;
 pub mod synth;

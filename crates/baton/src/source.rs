@@ -1,9 +1,8 @@
 //! Where frames come from: a `.y4m` file, a folder of numbered PNGs, or any video through an
 //! `ffmpeg` subprocess. Each frame comes with its time: frame *i* is at *i* × 1000 / fps ms.
 //!
-//! A live camera (V4L2) is not here yet. It is one more [`FrameSource`]: open the device,
-//! and for each buffer fill a [`Frame`] (convert YUYV or MJPEG to RGB with
-//! [`Frame::fill_from_ycbcr`]) and give the buffer's capture time in ms.
+//! A live camera (V4L2) is one more [`FrameSource`]: `camera::Camera`, behind the `camera`
+//! feature.
 
 use std::fmt;
 use std::io::{self, BufReader, Read};

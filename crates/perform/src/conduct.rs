@@ -3,6 +3,10 @@
 //!
 //! A **tempo source** ([`TempoSource`]) gives [`Cue`]s with their times on the performer's
 //! clock: a tempo, a beat, or the transport (start, stop, continue, song position). The
+//! transport follows MIDI 1.0: Stop pauses, Continue goes on from where the performance
+//! stands, Song Position jumps to its sixteenth note (through the score's tempo map; while
+//! paused, the performance then goes on from there at Continue), and Start is Song Position
+//! 0 and Continue: play from the top. The
 //! sources' decoders here are pure (bytes and times in, cues out): incoming MIDI clock
 //! ([`MidiClock`]), OSC ([`parse_osc`]), tap tempo ([`TapTempo`]); the I/O around them (a
 //! file, standard input, a UDP port, a key, a video through `orch-baton`) is the front end's.
@@ -499,6 +503,23 @@ impl ScoreBeats {
         (i as f64 + (score_us as f64 - b[i] as f64) / len, len)
     }
 
+    /// The score time (µs) `quarters` quarter notes from the start: the inverse of
+    /// [`at`](Self::at) (past the end the last quarter's length goes on).
+    pub fn time_of(&self, quarters: f64) -> u64 {
+        let b = &self.beats;
+        if quarters.is_nan() || quarters <= 0.0 {
+            return 0;
+        }
+        let i = (quarters.floor() as usize).min(b.len() - 2);
+        let len = (b[i + 1] - b[i]) as f64;
+        let t = b[i] as f64 + (quarters - i as f64) * len;
+        if t >= u64::MAX as f64 / 2.0 {
+            u64::MAX / 2
+        } else {
+            t.round() as u64
+        }
+    }
+
     /// The score's tempo at `score_us`, quarter notes a minute.
     pub fn bpm(&self, score_us: u64) -> f64 {
         60e6 / self.at(score_us).1
@@ -534,10 +555,30 @@ pub enum Action {
     Tempo(Tempo),
     /// The transport: stop (Stop).
     Pause,
-    /// The transport: go on (Continue, Start).
+    /// The transport: go on (Continue).
     Resume,
+    /// The transport: jump to this score time, µs (Song Position); a pause stays a pause.
+    Jump(u64),
+    /// The transport: jump to the top and play (Start: Song Position 0 and Continue, as MIDI
+    /// 1.0 has it).
+    Start,
     /// Nothing to change.
     Nothing,
+}
+
+impl Action {
+    /// Does it to a performance, through its control; `t_us` is when its cue arrived, on
+    /// the performer's clock ([`Timed::t_us`]).
+    pub fn apply(self, control: &crate::Control, t_us: u64) {
+        match self {
+            Action::Tempo(t) => control.set_tempo(t),
+            Action::Pause => control.pause(),
+            Action::Resume => control.resume(),
+            Action::Jump(score_us) => control.jump_to(score_us),
+            Action::Start => control.start_over(t_us),
+            Action::Nothing => {}
+        }
+    }
 }
 
 /// Turns cues into tempo factors. See the [module notes](self).
@@ -570,8 +611,10 @@ impl Follower {
             Cue::Tempo(bpm) => (Some(bpm), None),
             Cue::Beat { t_us, bpm } => (bpm, Some(t_us)),
             Cue::Stop => return Action::Pause,
-            Cue::Start | Cue::Continue => return Action::Resume,
-            Cue::SongPosition(_) => return Action::Nothing,
+            Cue::Start => return Action::Start,
+            Cue::Continue => return Action::Resume,
+            // MIDI beats are sixteenth notes: four to the quarter.
+            Cue::SongPosition(p) => return Action::Jump(self.beats.time_of(f64::from(p) / 4.0)),
         };
         let Some(bpm) = bpm.filter(|b| b.is_finite() && *b > 0.0) else {
             return Action::Nothing;
@@ -715,5 +758,22 @@ mod tests {
         };
         assert!((t.get() - (1.0 + PHASE_LIMIT)).abs() < 1e-9, "{t:?}");
         assert_eq!(ph.cue(&Cue::Stop, Some(&map)), Action::Pause);
+        assert_eq!(ph.cue(&Cue::Start, Some(&map)), Action::Start);
+        assert_eq!(ph.cue(&Cue::Continue, Some(&map)), Action::Resume);
+    }
+
+    #[test]
+    fn song_position_lands_on_its_sixteenth_through_the_tempo_map() {
+        // Quarters of 500 ms for two beats, then of 1 s.
+        let beats = ScoreBeats::from_times(vec![0, 500_000, 1_000_000, 2_000_000, 3_000_000]);
+        let mut f = Follower::new(beats.clone(), Follow::PHASE);
+        // 10 sixteenths: 2.5 quarters, half into the third (a 1 s quarter).
+        assert_eq!(f.cue(&Cue::SongPosition(10), None), Action::Jump(1_500_000));
+        assert_eq!(f.cue(&Cue::SongPosition(0), None), Action::Jump(0));
+        // Past the end the last quarter's length goes on.
+        assert_eq!(beats.time_of(6.0), 5_000_000);
+        for q in [0.0, 0.25, 1.5, 2.75, 3.5] {
+            assert!((beats.at(beats.time_of(q)).0 - q).abs() < 1e-9, "{q}");
+        }
     }
 }

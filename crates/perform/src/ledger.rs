@@ -46,6 +46,9 @@ pub enum Outcome {
     Dropped(DropReason),
     /// It struck, but the robot made no sound for it (a press too short to sound).
     Unmatched,
+    /// A jump passed over it: not played, the performance having jumped (a jump forward past
+    /// it, or the performer had read it ahead and not sent it when it jumped).
+    Skipped,
 }
 
 impl Outcome {
@@ -59,6 +62,7 @@ impl Outcome {
             Outcome::Joined => "joined",
             Outcome::Dropped(r) => r.name(),
             Outcome::Unmatched => "unmatched",
+            Outcome::Skipped => "skipped",
         }
     }
 
@@ -158,6 +162,11 @@ impl Ledger {
     /// The planner dropped it.
     pub fn dropped(&mut self, id: NoteId, reason: DropReason) {
         self.entry(id).outcome = Outcome::Dropped(reason);
+    }
+
+    /// A jump passed over it (see [`Outcome::Skipped`]).
+    pub fn skipped(&mut self, id: NoteId) {
+        self.entry(id).outcome = Outcome::Skipped;
     }
 
     /// Re-strikes that waited for their key's rest.

@@ -72,7 +72,9 @@ pub use conduct::{
 pub use ledger::{Ledger, NoteRecord, Outcome, ON_TIME_US};
 pub use link::{DinWire, Link, MidiOut, MidiRecording, RunningStatus};
 pub use performer::{perform, Control, Live, PerformError, Played, Setup, KEEP_ALIVE_US};
-pub use plan::{KeyMap, NoteId, PlanRules, PlanStats, Planned, Planner, ScoreEvent};
+pub use plan::{
+    Jumped, KeyMap, NoteId, PlanRules, PlanStats, Planned, Planner, ScoreEvent, Skipped,
+};
 pub use report::{Bus, Dropped, Outcomes, Planning, Report, Spread};
 pub use robot::{
     sim_boards, Boards, Decided, HostInterpreter, LocalRobot, RobotError, SimBoards, MAX_BOARDS,
@@ -81,7 +83,7 @@ pub use robot::{
 pub use tempo::{Tempo, TimeMap};
 
 /// The score events of a song, in order.
-pub fn song_events(song: &orch_seq::Song) -> impl Iterator<Item = ScoreEvent> + '_ {
+pub fn song_events(song: &orch_seq::Song) -> impl Iterator<Item = ScoreEvent> + Clone + '_ {
     song.events().iter().map(|e| ScoreEvent {
         score_us: e.time_us,
         bytes: e.bytes.clone(),

@@ -122,7 +122,9 @@ pub struct Control {
     stop: AtomicBool,
     pause: AtomicBool,
     poll_us: std::sync::atomic::AtomicU64,
-    tempo: Mutex<Option<Tempo>>,
+    tempo: Asked<Tempo>,
+    /// A jump asked: its target, and for a start over, when it was asked.
+    jump: Asked<(u64, Option<u64>)>,
     map: Mutex<Option<TimeMap>>,
 }
 
@@ -178,7 +180,29 @@ impl Control {
 
     /// Play at `tempo` from now on.
     pub fn set_tempo(&self, tempo: Tempo) {
-        *self.tempo.lock().unwrap_or_else(|e| e.into_inner()) = Some(tempo);
+        self.tempo.ask(tempo);
+    }
+
+    /// Jump to score time `score_us` (µs of the song at its written tempo): every key is
+    /// released at once on every output (All Notes Off and All Sound Off on every channel),
+    /// the channels' state at the target is chased (see [`Planner::jump`](crate::Planner::jump)),
+    /// and the performance goes on from the target, at the tempo it had, each note after the
+    /// target once and in order. Notes sounding across the target are not restarted. Paused,
+    /// the jump is taken when the performance resumes. A later jump asked before this one is
+    /// taken replaces it.
+    pub fn jump_to(&self, score_us: u64) {
+        self.jump.ask((score_us, None));
+    }
+
+    /// Play from the top (a conductor's Start), asked at wall time `asked_at_us` on the
+    /// performer's clock: a [`jump_to`](Self::jump_to) the top and a
+    /// [`resume`](Self::resume), unless at `asked_at_us` the performance had not got past the
+    /// point its present pass began at (the top, or the last jump's target): then it only
+    /// resumes (a Start that comes as the performance begins does not play its first notes
+    /// twice).
+    pub fn start_over(&self, asked_at_us: u64) {
+        self.jump.ask((0, Some(asked_at_us)));
+        self.resume();
     }
 
     /// The performance's score ↔ wall time map as it stands (`None` before it starts): where
@@ -190,16 +214,33 @@ impl Control {
     fn publish(&self, map: TimeMap) {
         *self.map.lock().unwrap_or_else(|e| e.into_inner()) = Some(map);
     }
+}
 
-    fn tempo_pending(&self) -> bool {
-        self.tempo
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .is_some()
+/// A request to every performance that shares a control (one per robot): each takes the
+/// latest one it has not seen, by its number.
+#[derive(Debug, Default)]
+struct Asked<T> {
+    latest: Mutex<(u64, Option<T>)>,
+}
+
+impl<T: Copy> Asked<T> {
+    fn ask(&self, value: T) {
+        let mut l = self.latest.lock().unwrap_or_else(|e| e.into_inner());
+        *l = (l.0 + 1, Some(value));
     }
 
-    fn take_tempo(&self) -> Option<Tempo> {
-        self.tempo.lock().unwrap_or_else(|e| e.into_inner()).take()
+    /// The latest request not seen yet (`seen` is the number of the last one seen).
+    fn pending(&self, seen: u64) -> Option<T> {
+        let l = self.latest.lock().unwrap_or_else(|e| e.into_inner());
+        l.1.filter(|_| l.0 > seen)
+    }
+
+    /// [`pending`](Self::pending), marked seen.
+    fn take(&self, seen: &mut u64) -> Option<T> {
+        let l = self.latest.lock().unwrap_or_else(|e| e.into_inner());
+        let v = l.1.filter(|_| l.0 > *seen);
+        *seen = l.0;
+        v
     }
 }
 
@@ -271,6 +312,11 @@ pub struct Played {
     pub restrikes_waited: u64,
     /// Whether it was stopped before the end.
     pub stopped: bool,
+    /// Jumps taken ([`Control::jump_to`]).
+    pub jumps: u64,
+    /// Notes the performance came to again after a jump back: `records` holds the score's
+    /// notes plus these (each pass over a note is a record of its own).
+    pub replayed: u64,
 }
 
 impl Played {
@@ -289,7 +335,9 @@ impl Played {
         let span = self.end_us.saturating_sub(self.start_us).max(1) as f64;
         let s = &self.stats;
         Report {
-            notes: self.records.len() as u64,
+            notes: (self.records.len() as u64).saturating_sub(self.replayed),
+            jumps: self.jumps,
+            replayed: self.replayed,
             outcomes,
             strikes: m.clean_onsets + m.smeared_onsets,
             unmatched,
@@ -351,7 +399,13 @@ enum Out<'m, M: MidiOut> {
 /// `setup.link`; without, the virtual robot is the robot. `clock` paces the sends (a
 /// `VirtualClock` renders as fast as the machine goes); with `live`, the performer wakes at
 /// least every 40 ms (or as [`Control::poll_every`] says) to call it with where it stands
-/// and to look at `control`.
+/// and to look at `control`. With a `control`, `source` is cloned before it is read, so a
+/// jump ([`Control::jump_to`]) can read the score again from its start.
+///
+/// After a jump the account goes on as one: notes a jump passes over (after a jump forward,
+/// those between the place it left and the target; those the performer had read ahead and
+/// not sent yet) are [`Outcome::Skipped`]; after a jump back, the notes played again are
+/// records of their own ([`Played::replayed`]).
 pub fn perform<S, M>(
     setup: &Setup,
     source: S,
@@ -362,9 +416,10 @@ pub fn perform<S, M>(
     mut live: Option<&mut dyn FnMut(&Live)>,
 ) -> Result<Played, PerformError>
 where
-    S: Iterator<Item = ScoreEvent>,
+    S: Iterator<Item = ScoreEvent> + Clone,
     M: MidiOut,
 {
+    let origin = control.map(|_| source.clone());
     let boards = sim_boards(&setup.sim).map_err(robot_err)?;
     let mut robot = LocalRobot::<SimBoards>::new(setup.config, boards).map_err(robot_err)?;
     // Start once the boards are configured, on a whole millisecond.
@@ -403,9 +458,51 @@ where
     let every = control.map_or(SHOW_EVERY_US, Control::poll_us);
     // Notes sent (early) whose time to sound has not come: a tempo change moves that time.
     let mut sent_ahead: Vec<(u32, i64)> = Vec::new();
+    // The account's number of a planned note is its score index plus `offset`, which grows at
+    // each jump back (a note played again is a record of its own). The latest score index
+    // sent or dropped since the last jump tells a jump forward from one back.
+    let mut offset = 0u32;
+    let mut committed: Option<u32> = None;
+    let mut jumps = 0u64;
+    // Where the present pass began in the score (0, or the last jump's target).
+    let mut pass_from = 0u64;
+    // The numbers of the last tempo and jump asked of the control that this performance took.
+    let (mut seen_tempo, mut seen_jump) = (0u64, 0u64);
     loop {
+        if let (Some(c), Some(origin)) = (control, origin.as_ref()) {
+            let now = clock.now_us().max(last_at);
+            // A start over asked before the performance got past where its pass began
+            // changes nothing.
+            let here = |&(t, asked): &(u64, Option<u64>)| {
+                asked.is_some_and(|a| t == pass_from && planner.time_map().score(a as i64) <= t)
+            };
+            if let Some((target, _)) = c.jump.take(&mut seen_jump).filter(|j| !here(j)) {
+                release_all(&mut out, setup.link, now, &mut robot, &mut ledger)?;
+                last_at = now;
+                last_byte = Some(now);
+                burst = 0;
+                let read = planner.notes_read();
+                let jumped = planner.jump(origin.clone(), now as i64, target);
+                let first = planner.notes_read();
+                let back = committed.is_some_and(|m| m >= first);
+                let unsent = jumped.unsent.iter().filter(|u| back || u.note < first);
+                for u in unsent.chain(&jumped.passed) {
+                    let id = u.note + offset;
+                    ledger.score(id, u.channel, u.note_number, u.score_at_us);
+                    ledger.skipped(id);
+                }
+                if back {
+                    offset += read - first;
+                }
+                committed = None;
+                sent_ahead.clear();
+                jumps += 1;
+                pass_from = target;
+                c.publish(*planner.time_map());
+            }
+        }
         if let Some(c) = control {
-            if let Some(t) = c.take_tempo() {
+            if let Some(t) = c.tempo.take(&mut seen_tempo) {
                 let now = clock.now_us() as i64;
                 let old = *planner.time_map();
                 planner.set_tempo(now, t);
@@ -464,19 +561,7 @@ where
                 if let Some(c) = control.filter(|c| c.paused()) {
                     // Every key up, score time held, until resumed (or stopped).
                     let at = clock.now_us().max(last_at);
-                    for ch in 0..16u8 {
-                        for cc in [123, 120] {
-                            deliver(
-                                &mut out,
-                                setup.link,
-                                at,
-                                &[0xB0 | ch, cc, 0],
-                                None,
-                                &mut robot,
-                                &mut ledger,
-                            )?;
-                        }
-                    }
+                    release_all(&mut out, setup.link, at, &mut robot, &mut ledger)?;
                     last_at = at;
                     last_byte = Some(at);
                     burst = 0;
@@ -492,7 +577,7 @@ where
                         }
                         robot.drain_presses(|p| ledger.press(p));
                         l(&Live {
-                            song_us,
+                            song_us: c.jump.pending(seen_jump).map_or(song_us, |j| j.0),
                             keys_down: robot.keys_down(),
                             notes_sent,
                             tempo: planner.time_map().tempo().get(),
@@ -505,7 +590,9 @@ where
                     replan = true;
                     break;
                 }
-                if control.is_some_and(Control::tempo_pending) {
+                if control.is_some_and(|c| {
+                    c.tempo.pending(seen_tempo).is_some() || c.jump.pending(seen_jump).is_some()
+                }) {
                     replan = true;
                     break;
                 }
@@ -516,7 +603,11 @@ where
                 }
                 clock.wait_until(now + every);
                 l(&Live {
-                    song_us: planner.time_map().score(clock.now_us() as i64),
+                    // In a jump's lead-in, the target.
+                    song_us: planner
+                        .time_map()
+                        .score(clock.now_us() as i64)
+                        .max(pass_from),
                     keys_down: robot.keys_down(),
                     notes_sent,
                     tempo: planner.time_map().tempo().get(),
@@ -564,6 +655,10 @@ where
                 score_at_us,
                 ..
             } => {
+                if let Some(i) = note {
+                    committed = Some(committed.map_or(i, |m| m.max(i)));
+                }
+                let note = note.map(|i| i + offset);
                 if let (Some(id), Some((ch, n, _))) = (note, bytes.note_on()) {
                     ledger.score(id, ch, n, score_at_us);
                     notes_sent += 1;
@@ -595,6 +690,8 @@ where
                 reason,
                 ..
             } => {
+                committed = Some(committed.map_or(note, |m| m.max(note)));
+                let note = note + offset;
                 ledger.score(note, channel, note_number, score_at_us);
                 ledger.dropped(note, reason);
             }
@@ -663,7 +760,7 @@ where
     let end = drained + longest_release + 1_000;
     let restrikes_waited = ledger.restrikes_waited();
     let (interp, performance) = robot.finish(end);
-    let records = ledger.close(&performance.presses, notes);
+    let records = ledger.close(&performance.presses, notes + offset as usize);
     Ok(Played {
         records,
         performance,
@@ -674,7 +771,26 @@ where
         end_us: end,
         restrikes_waited,
         stopped: stopped_at.is_some(),
+        jumps,
+        replayed: u64::from(offset),
     })
+}
+
+/// Lets every key go at `t`, on every channel: All Notes Off and All Sound Off (the pedal's
+/// notes too).
+fn release_all<M: MidiOut>(
+    out: &mut Out<'_, M>,
+    link: Link,
+    t: u64,
+    robot: &mut LocalRobot<SimBoards>,
+    ledger: &mut Ledger,
+) -> Result<(), PerformError> {
+    for ch in 0..16u8 {
+        for cc in [123, 120] {
+            deliver(out, link, t, &[0xB0 | ch, cc, 0], None, robot, ledger)?;
+        }
+    }
+    Ok(())
 }
 
 /// Hands one message to the robot side at `t`.

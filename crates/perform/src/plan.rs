@@ -224,8 +224,34 @@ pub struct Planner<S: Iterator<Item = ScoreEvent>> {
     channel_last: [Option<i64>; 16],
     channel_cc: [Option<(QueueKey, i64)>; 16],
     next_note: NoteId,
+    /// Channels whose sustain or sostenuto pedal the score has used: a jump sets their pedals
+    /// to the score's state at the target (up if it has none there).
+    pedals: u16,
     eager: bool,
     stats: PlanStats,
+}
+
+/// A score note a jump passed over or left unsent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Skipped {
+    /// The note (its index among the score's Note-Ons).
+    pub note: NoteId,
+    /// Its channel (0..=15).
+    pub channel: u8,
+    /// Its note number.
+    pub note_number: u8,
+    /// When it would have sounded, wall µs, by the time map before the jump.
+    pub score_at_us: i64,
+}
+
+/// What a jump ([`Planner::jump`]) left behind.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Jumped {
+    /// Notes read and planned before the jump but not sent (nor dropped) yet, in queue order.
+    pub unsent: Vec<Skipped>,
+    /// Notes before the target that the planner had not read before the jump (a jump forward
+    /// passes over them), in score order.
+    pub passed: Vec<Skipped>,
 }
 
 impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
@@ -253,6 +279,7 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
             channel_last: [None; 16],
             channel_cc: [None; 16],
             next_note: 0,
+            pedals: 0,
             eager: false,
             stats: PlanStats::default(),
         }
@@ -301,6 +328,122 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         let old = self.map;
         self.map.resume(paused_us, now_us);
         self.remap(old, paused_us, now_us);
+    }
+
+    /// Jumps to score time `target_us`, from wall time `now_us` on, reading the score again
+    /// from `source` (the same score from its start; it is read up to the target without
+    /// planning anything). Every key is taken to be released at `now_us` (the performer lets
+    /// every key go there); the queue is emptied and returned as [`Jumped::unsent`]. The target
+    /// plays at `now_us` plus the lookahead (at least the re-strike gap), at the same tempo,
+    /// so the first notes after it strike on time. The channels' state at the target is
+    /// chased: the last program, controllers (0–119, after any Reset All Controllers), channel
+    /// pressure and pitch bend of each channel before the target are sent at `now_us`, and
+    /// the pedals (64, 66) of every channel that has used one are set to their state there
+    /// (up if none). Notes sounding across the target (their Note-On before it) are not
+    /// restarted. Note numbering goes on from the score's own: the first note at or after the
+    /// target keeps its index among the score's Note-Ons ([`notes_read`](Self::notes_read)
+    /// after the jump).
+    pub fn jump(&mut self, source: S, now_us: i64, target_us: u64) -> Jumped {
+        let read_before = self.next_note;
+        let mut jumped = Jumped::default();
+        for p in std::mem::take(&mut self.queue).into_values() {
+            match p {
+                Planned::Send {
+                    bytes,
+                    note: Some(id),
+                    score_at_us,
+                    ..
+                } => {
+                    if let Some((ch, n, _)) = bytes.note_on() {
+                        jumped.unsent.push(Skipped {
+                            note: id,
+                            channel: ch,
+                            note_number: n,
+                            score_at_us,
+                        });
+                    }
+                }
+                Planned::Dropped {
+                    score_at_us,
+                    channel,
+                    note_number,
+                    note,
+                    ..
+                } => jumped.unsent.push(Skipped {
+                    note,
+                    channel,
+                    note_number,
+                    score_at_us,
+                }),
+                Planned::Send { .. } => {}
+            }
+        }
+        let keys = self.keys.len();
+        self.keys = vec![
+            KeyModel {
+                last_send: Some(now_us),
+                released_at: Some(now_us),
+                ..KeyModel::default()
+            };
+            keys
+        ];
+        self.on = [0; 128];
+        self.on_sent.fill(i64::MIN);
+        self.channel_last = [None; 16];
+        self.channel_cc = [None; 16];
+        // Read up to the target: count the notes, keep each channel's latest state.
+        let old = self.map;
+        let mut state: BTreeMap<(u8, u8, u8), WireBytes> = BTreeMap::new();
+        self.source = source.peekable();
+        self.next_note = 0;
+        while let Some(e) = self.source.next_if(|e| e.score_us < target_us) {
+            if let Some((ch, n, _)) = e.bytes.note_on() {
+                if self.next_note >= read_before {
+                    jumped.passed.push(Skipped {
+                        note: self.next_note,
+                        channel: ch,
+                        note_number: n,
+                        score_at_us: old.wall(e.score_us),
+                    });
+                }
+                self.next_note += 1;
+                continue;
+            }
+            let Some(ch) = e.bytes.channel() else {
+                continue;
+            };
+            match (e.bytes.status() & 0xF0, e.bytes.get(1).copied()) {
+                (0xB0, Some(121)) => state.retain(|&(c, kind, _), _| c != ch || kind == 0xC0),
+                (0xB0, Some(c @ 0..=119)) => {
+                    if matches!(c, 64 | 66) {
+                        self.pedals |= 1 << ch;
+                    }
+                    state.insert((ch, 0xB0, c), e.bytes);
+                }
+                (kind @ (0xC0 | 0xD0 | 0xE0), _) => {
+                    state.insert((ch, kind, 0), e.bytes);
+                }
+                _ => {}
+            }
+        }
+        for ch in 0..16u8 {
+            if self.pedals & 1 << ch != 0 {
+                for pedal in [64, 66] {
+                    state
+                        .entry((ch, 0xB0, pedal))
+                        .or_insert_with(|| WireBytes::new(&[0xB0 | ch, pedal, 0]));
+                }
+            }
+        }
+        // Program first, then controllers, pressure and bend, channel by channel.
+        let mut chased: Vec<_> = state.into_iter().collect();
+        chased.sort_by_key(|&((ch, kind, n), _)| (ch, kind != 0xC0, kind, n));
+        for (_, bytes) in chased {
+            self.send(now_us, bytes, None, now_us);
+        }
+        let lead_in = self.lookahead.max(self.rules.restrike_gap_us as i64);
+        self.map.jump(now_us + lead_in, target_us);
+        jumped
     }
 
     /// The queue and the key models after the map changed from `old`: times from `from_us`
@@ -458,6 +601,9 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         } else if let Some((ch, n)) = e.bytes.note_off() {
             self.note_off(ch, n, w, e.bytes);
         } else if let Some((ch, c, _)) = e.bytes.control_change() {
+            if matches!(c, 64 | 66) {
+                self.pedals |= 1 << ch;
+            }
             if matches!(c, 64 | 66 | 120 | 121 | 123..=127) {
                 let lo = self.channel_last[usize::from(ch)].unwrap_or(i64::MIN);
                 let at = w.max(lo);

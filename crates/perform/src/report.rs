@@ -86,6 +86,8 @@ pub struct Outcomes {
     pub joined: u64,
     /// Not played, by reason.
     pub dropped: Dropped,
+    /// Passed over by a jump ([`Outcome::Skipped`]).
+    pub skipped: u64,
 }
 
 impl Outcomes {
@@ -101,6 +103,7 @@ impl Outcomes {
                 Outcome::Unison => o.unison += 1,
                 Outcome::Joined => o.joined += 1,
                 Outcome::Unmatched => unmatched += 1,
+                Outcome::Skipped => o.skipped += 1,
                 Outcome::Dropped(reason) => {
                     let d = &mut o.dropped;
                     *match reason {
@@ -119,7 +122,13 @@ impl Outcomes {
 
     /// Notes accounted for (unmatched ones aside).
     pub fn total(&self) -> u64 {
-        self.on_time + self.late + self.early + self.unison + self.joined + self.dropped.total()
+        self.on_time
+            + self.late
+            + self.early
+            + self.unison
+            + self.joined
+            + self.dropped.total()
+            + self.skipped
     }
 }
 
@@ -163,6 +172,11 @@ pub struct Bus {
 pub struct Report {
     /// Notes (Note-Ons) in the score.
     pub notes: u64,
+    /// Jumps taken (to a bar, a song position, the top).
+    pub jumps: u64,
+    /// Notes played again after a jump back: each pass over a note has its own outcome, so
+    /// the outcomes add up to `notes + replayed`.
+    pub replayed: u64,
     /// What became of them: one count per outcome.
     pub outcomes: Outcomes,
     /// Key-down sounds of the virtual robot.
@@ -207,7 +221,7 @@ pub struct Report {
 impl Report {
     /// Whether the outcomes add up: every note counted once, every strike a struck note's.
     pub fn adds_up(&self) -> bool {
-        self.outcomes.total() + self.unmatched == self.notes
+        self.outcomes.total() + self.unmatched == self.notes + self.replayed
             && self.strikes == self.outcomes.on_time + self.outcomes.late + self.outcomes.early
     }
 
@@ -260,6 +274,12 @@ impl Report {
         ));
         if self.unmatched > 0 {
             line(format!("struck but no sound    {}", self.unmatched));
+        }
+        if self.jumps > 0 {
+            line(format!(
+                "jumps                  {}: {} notes skipped, {} played again after a jump back",
+                self.jumps, o.skipped, self.replayed
+            ));
         }
         line(format!("strikes heard          {}", self.strikes));
         line(format!(

@@ -98,6 +98,13 @@ impl TimeMap {
         self.score = score;
     }
 
+    /// A jump: score time `score` plays at wall time `wall`, at the same tempo (score time is
+    /// continuous from there on).
+    pub fn jump(&mut self, wall: i64, score: u64) {
+        self.wall = wall;
+        self.score = score;
+    }
+
     /// From wall time `now` on, play at `tempo`; the score time at `now` does not move.
     pub fn change(&mut self, now: i64, tempo: Tempo) {
         let score = self.score(now);

@@ -11,6 +11,8 @@ use orch_perform::{
 };
 use orch_seq::{Clock, Lateness, Song, VirtualClock};
 
+mod common;
+
 /// A Standard MIDI File: `beats` quarter notes at `bpm` (480 ticks a quarter), one note each,
 /// half a beat long.
 fn quarters(beats: u32, bpm: f64) -> Song {
@@ -232,4 +234,75 @@ fn osc_tempo_messages_are_parsed_and_applied() {
     let span = due[15] - due[0];
     assert!((span - 6_666_667).abs() < 30_000, "{due:?}");
     assert!((due[7] - due[4] - 2_000_000).abs() < 15_000, "{due:?}");
+}
+
+/// A MIDI clock master's transport, as a sequencer sends it: Start and four beats of clock at
+/// 120 BPM, Stop, Song Position to bar 5 (64 sixteenths), Continue, and clock on. The
+/// performance pauses, jumps to bar 5 of the score and goes on from there: the first note
+/// after Continue is the first of bar 5, every later note once and in order.
+#[test]
+fn song_position_from_a_midi_clock_lands_on_its_bar() {
+    let song = quarters(32, 120.0);
+    let bar5 = song.bar_start_us(5).unwrap();
+    assert_eq!(bar5, 8_000_000);
+    let clock_us = 500_000 / 24;
+    let mut input: Vec<(u64, Vec<u8>)> = vec![(0, vec![0xFA])];
+    input.extend((0..96).map(|i| (i * clock_us, vec![0xF8])));
+    input.push((2_000_000, vec![0xFC]));
+    // 64 = 0x40: LSB 0x40, MSB 0; a clock byte inside the message, as real time allows.
+    input.push((2_200_000, vec![0xF2, 0x40, 0xF8, 0x00]));
+    input.push((2_500_000, vec![0xFB]));
+    input.extend((0..24 * 17).map(|i| (2_500_000 + i * clock_us, vec![0xF8])));
+    let control = Control::new();
+    let mut follower = Follower::new(ScoreBeats::of(&song), Follow::PHASE);
+    let mut decoder = MidiClock::new();
+    let times = input.iter().map(|(t, _)| *t).collect();
+    let mut k = 0;
+    let mut jump_asked = None;
+    let mut clock = Conducted {
+        inner: VirtualClock::new(),
+        times,
+        next: 0,
+        start: None,
+        control: Arc::clone(&control),
+        apply: |t: u64, c: &Control| {
+            for &b in &input[k].1 {
+                if let Some(cue) = decoder.feed(t, b) {
+                    let action = follower.cue(&cue, c.time_map().as_ref());
+                    if let Action::Jump(to) = action {
+                        jump_asked = Some(to);
+                    }
+                    action.apply(c, t);
+                }
+            }
+            k += 1;
+        },
+    };
+    let mut views = Vec::new();
+    let mut live = |l: &orch_perform::Live| views.push((l.song_us, l.paused));
+    let mut out = MidiRecording::default();
+    let played = perform(
+        &setup(),
+        song_events(&song),
+        song.notes(),
+        Some(&mut out),
+        &mut clock,
+        Some(&control),
+        Some(&mut live),
+    )
+    .unwrap();
+    assert_eq!(jump_asked, Some(bar5));
+    // Paused, the view shows where it will go on: bar 5.
+    assert!(views.iter().any(|&(s, p)| p && s == bar5), "{views:?}");
+    let r = played.report(None);
+    assert!(r.adds_up(), "{r:?}");
+    // The Start as it began changed nothing; the Song Position was one jump.
+    assert_eq!((r.jumps, r.replayed), (1, 0), "{r:?}");
+    // Notes 0 to 4 (the fifth sent early, before Stop), then bar 5's on.
+    let ons: Vec<u8> = common::note_ons(&out);
+    let score: Vec<u8> = (0..32).map(|i| 48 + (i % 24) as u8).collect();
+    let played_before = ons.len() - 16;
+    assert_eq!(ons[..played_before], score[..played_before]);
+    assert_eq!(ons[played_before..], score[16..], "{ons:?}");
+    assert_eq!(r.outcomes.skipped as usize, 16 - played_before, "{r:?}");
 }

@@ -9,6 +9,9 @@ use orch_perform::{
 };
 use orch_seq::{Song, VirtualClock};
 
+mod common;
+use common::{note_ons, note_ons_at};
+
 #[test]
 fn a_tempo_change_mid_piece_plays_every_note_once_in_order() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/midi");
@@ -81,30 +84,6 @@ fn a_tempo_change_mid_piece_plays_every_note_once_in_order() {
         let b = score.iter().filter(|&&n| n == key).count();
         assert_eq!(a.len(), b, "key {key}");
     }
-}
-
-/// The note numbers of the Note-Ons sent, in order, with their send times.
-fn note_ons_at(out: &MidiRecording) -> Vec<(u64, u8)> {
-    out.sent
-        .iter()
-        .scan(0u8, |status, (t, b)| {
-            let (st, data) = if b[0] >= 0x80 {
-                (b[0], &b[1..])
-            } else {
-                (*status, &b[..])
-            };
-            if b[0] < 0xF8 {
-                *status = st;
-            }
-            Some((*t, st, data.to_vec()))
-        })
-        .filter(|(_, st, d)| st & 0xF0 == 0x90 && d.len() == 2 && d[1] > 0)
-        .map(|(t, _, d)| (t, d[0]))
-        .collect()
-}
-
-fn note_ons(out: &MidiRecording) -> Vec<u8> {
-    note_ons_at(out).into_iter().map(|(_, n)| n).collect()
 }
 
 /// Plays the invention over `link` (to a MIDI recording, or on the virtual robot itself),

@@ -668,6 +668,48 @@ impl Song {
         )
     }
 
+    /// Where bar `bar` (from 1, as [`bar_beat`](Self::bar_beat) counts bars) begins, µs; `None`
+    /// for bar 0. A bar past the end of the song is where it would begin if the last time
+    /// signature went on.
+    pub fn bar_start_us(&self, bar: u32) -> Option<u64> {
+        const EPS: f64 = 1e-6;
+        let want = u64::from(bar.checked_sub(1)?);
+        let mut start_q = 0.0;
+        let mut bar_len = 4.0;
+        let mut bars_before = 0u64;
+        for sig in &self.time_signatures {
+            let sig_q = self.quarters_at_tick(sig.tick);
+            let bars = ((sig_q - start_q) / bar_len - EPS).ceil().max(0.0) as u64;
+            if want < bars_before.saturating_add(bars) {
+                break;
+            }
+            bars_before = bars_before.saturating_add(bars);
+            start_q = sig_q;
+            bar_len = f64::from(sig.numerator.max(1)) * 4.0 / f64::from(sig.denominator());
+        }
+        Some(self.time_at_quarters(start_q + (want - bars_before) as f64 * bar_len))
+    }
+
+    /// The time (µs) `quarters` quarter notes from the start, by the tempo map (the last tempo
+    /// going on past the end; 0 before the start).
+    pub fn time_at_quarters(&self, quarters: f64) -> u64 {
+        if quarters.is_nan() || quarters <= 0.0 {
+            return 0;
+        }
+        let i = self
+            .tempo_quarters
+            .partition_point(|&q| q <= quarters)
+            .saturating_sub(1);
+        let c = self.tempo_map[i];
+        let us = c.time_us as f64
+            + (quarters - self.tempo_quarters[i]) * f64::from(c.us_per_quarter.max(1));
+        if us >= u64::MAX as f64 / 2.0 {
+            u64::MAX / 2
+        } else {
+            us.round() as u64
+        }
+    }
+
     /// The messages in order with their times: `(time_us, bytes)`.
     pub fn messages(&self) -> impl Iterator<Item = (u64, &[u8])> + '_ {
         self.events.iter().map(|e| (e.time_us, e.bytes.as_slice()))

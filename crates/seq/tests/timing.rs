@@ -205,6 +205,36 @@ fn bar_and_beat_follow_time_signatures() {
 }
 
 #[test]
+fn bar_start_inverts_bar_and_beat_across_signatures_and_tempos() {
+    // 3/4 from the start, 6/8 from bar 3 (tick 2880), ppq 480; 120 bpm, then 60 from tick 960
+    // (times are deltas).
+    let bytes = smf(
+        1,
+        480,
+        &[vec![
+            (0, vec![0xFF, 0x58, 0x04, 3, 2, 24, 8]),
+            (960, vec![0xFF, 0x51, 0x03, 0x0F, 0x42, 0x40]),
+            (1920, vec![0xFF, 0x58, 0x04, 6, 3, 24, 8]),
+        ]],
+    );
+    let song = Song::parse(&bytes).unwrap();
+    assert_eq!(song.bar_start_us(0), None);
+    for (bar, tick) in [
+        (1, 0),
+        (2, 1440),
+        (3, 2880),
+        (4, 2880 + 1440),
+        (9, 2880 + 6 * 1440),
+    ] {
+        let t = song.bar_start_us(bar).unwrap();
+        assert_eq!(t, song.time_at_tick(tick), "bar {bar}");
+        assert_eq!(song.bar_beat(t), (bar, 1), "bar {bar}");
+    }
+    // Half a quarter at 60 bpm after the tempo change at 1 s.
+    assert_eq!(song.time_at_quarters(2.5), 1_500_000);
+}
+
+#[test]
 fn bar_and_beat_default_to_4_4() {
     let song = Song::parse(&smf(0, 480, &[vec![(4 * 480 + 480, on(0, 60))]])).unwrap();
     assert_eq!(song.bar_beat(song.events()[0].time_us), (2, 2));

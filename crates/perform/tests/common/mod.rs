@@ -45,7 +45,7 @@ pub fn setup(link: Link) -> Setup {
 /// Performs `events` (`notes` Note-Ons) on the virtual clock, to `midi` if given.
 pub fn render_to<M: MidiOut>(
     setup: &Setup,
-    events: impl Iterator<Item = ScoreEvent>,
+    events: impl Iterator<Item = ScoreEvent> + Clone,
     notes: usize,
     midi: Option<&mut M>,
 ) -> Played {
@@ -62,6 +62,35 @@ pub fn render_to<M: MidiOut>(
 }
 
 /// Performs `events` on the virtual robot alone.
-pub fn render(setup: &Setup, events: impl Iterator<Item = ScoreEvent>, notes: usize) -> Played {
+pub fn render(
+    setup: &Setup,
+    events: impl Iterator<Item = ScoreEvent> + Clone,
+    notes: usize,
+) -> Played {
     render_to::<MidiRecording>(setup, events, notes, None)
+}
+
+/// The note numbers of the Note-Ons sent, in order, with their send times.
+pub fn note_ons_at(out: &MidiRecording) -> Vec<(u64, u8)> {
+    out.sent
+        .iter()
+        .scan(0u8, |status, (t, b)| {
+            let (st, data) = if b[0] >= 0x80 {
+                (b[0], &b[1..])
+            } else {
+                (*status, &b[..])
+            };
+            if b[0] < 0xF8 {
+                *status = st;
+            }
+            Some((*t, st, data.to_vec()))
+        })
+        .filter(|(_, st, d)| st & 0xF0 == 0x90 && d.len() == 2 && d[1] > 0)
+        .map(|(t, _, d)| (t, d[0]))
+        .collect()
+}
+
+/// The note numbers of the Note-Ons sent, in order.
+pub fn note_ons(out: &MidiRecording) -> Vec<u8> {
+    note_ons_at(out).into_iter().map(|(_, n)| n).collect()
 }

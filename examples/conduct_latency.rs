@@ -1,0 +1,198 @@
+//! Real-clock latency of `orch conduct`: from the moment a conductor's beat is written on a
+//! real socket to the moment the performer sends a message that beat retimed.
+//!
+//! `orch conduct` (the binary given as the first argument) plays a piece of quarter notes
+//! written at 240 BPM (one every 250 ms) with `--source osc:PORT --follow immediate`, its
+//! only output `--out udp:127.0.0.1:PORT2`: every MIDI message it sends arrives as a datagram
+//! here, stamped on arrival. The piece steadies at its written tempo; then, 15 to 25 ms (spread
+//! over the samples, so that the performer's 5-ms wake is met at every phase) before a
+//! press is due, this program writes an OSC `/orch/beat 4800.0` (a beat at twenty times the
+//! tempo) on the source's UDP socket. At twenty times the tempo that press is due at once,
+//! so the time from writing the beat to that press's arrival here is the whole path: the
+//! source's thread reading and decoding the packet, the follower, the performance's control,
+//! the performer's next wake (every 5 ms in `orch conduct`), its replanning and its send, and
+//! the loopback datagram (tens of µs). A `/orch/beat 240.0` then puts the written tempo back
+//! and the next sample waits for the tempo to steady.
+//!
+//! ```sh
+//! cargo build --release --bin orch --example conduct_latency
+//! target/release/examples/conduct_latency target/release/orch [SAMPLES]
+//! ```
+//!
+//! Prints the median, 99th percentile and largest latency over the samples (40 by default).
+
+use std::net::UdpSocket;
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use orch_perform::conduct::{encode_osc, OscArg};
+
+/// The piece's beat, ms (240 BPM).
+const BEAT_MS: u64 = 250;
+/// How long before a due press the beat is written: 15 ms and up to 10 ms more, spread
+/// evenly over the samples (the performer wakes every 5 ms from its last send: a fixed offset
+/// would always meet the same phase of its wake).
+const AHEAD_US: u64 = 15_000;
+const SPREAD_US: u64 = 10_000;
+
+/// A Standard MIDI File: `beats` quarter notes at 240 BPM, one note each, half a beat long.
+fn piece(beats: u32) -> Vec<u8> {
+    let mut trk = vec![0x00, 0xFF, 0x51, 0x03];
+    trk.extend_from_slice(&(BEAT_MS as u32 * 1000).to_be_bytes()[1..]);
+    for i in 0..beats {
+        let n = 48 + (i % 24) as u8;
+        let delta: &[u8] = if i == 0 { &[0x00] } else { &[0x81, 0x70] };
+        trk.extend_from_slice(delta);
+        trk.extend_from_slice(&[0x90, n, 100, 0x81, 0x70, 0x80, n, 0]);
+    }
+    trk.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
+    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
+    smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
+    smf.extend_from_slice(&trk);
+    smf
+}
+
+/// A free UDP port on 127.0.0.1.
+fn free_port() -> u16 {
+    UdpSocket::bind("127.0.0.1:0")
+        .and_then(|s| s.local_addr())
+        .map(|a| a.port())
+        .expect("a free UDP port")
+}
+
+/// Kills the child on the way out, however this ends.
+struct Killed(Child);
+
+impl Drop for Killed {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// The arrival of each Note-On (velocity above 0) in the datagrams `socket` receives, under
+/// running status.
+fn note_ons(socket: UdpSocket, tx: mpsc::Sender<Instant>) {
+    let mut buf = [0u8; 2048];
+    let (mut status, mut data) = (0u8, Vec::new());
+    while let Ok(n) = socket.recv(&mut buf) {
+        let at = Instant::now();
+        for &b in &buf[..n] {
+            match b {
+                0xF8..=0xFF => {}
+                0x80..=0xF7 => {
+                    status = b;
+                    data.clear();
+                }
+                _ => {
+                    data.push(b);
+                    let len = if matches!(status & 0xF0, 0xC0 | 0xD0) {
+                        1
+                    } else {
+                        2
+                    };
+                    if data.len() == len {
+                        if status & 0xF0 == 0x90 && data[1] > 0 && tx.send(at).is_err() {
+                            return;
+                        }
+                        data.clear();
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1000.0
+}
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let orch = args
+        .next()
+        .expect("usage: conduct_latency PATH/TO/orch [SAMPLES]");
+    let samples: usize = args.next().map_or(40, |s| s.parse().expect("SAMPLES"));
+    let dir = std::env::temp_dir().join(format!("orch-conduct-latency-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a scratch folder");
+    let file = dir.join("quarters-240.mid");
+    // Each sample takes about six beats; room for all of them, twice over.
+    std::fs::write(&file, piece(samples as u32 * 12 + 40)).expect("the piece written");
+
+    let sink = UdpSocket::bind("127.0.0.1:0").expect("a UDP socket for the output");
+    let out = sink.local_addr().expect("its address");
+    let (tx, arrivals) = mpsc::channel();
+    std::thread::spawn(move || note_ons(sink, tx));
+    let osc_port = free_port();
+    let _child = Killed(
+        Command::new(&orch)
+            .arg("conduct")
+            .arg(&file)
+            .args(["--source", &format!("osc:{osc_port}")])
+            .args(["--follow", "immediate", "--no-view", "--json"])
+            .args(["--out", &format!("udp:{out}")])
+            .stdout(Stdio::null())
+            .spawn()
+            .unwrap_or_else(|e| panic!("{orch}: {e}")),
+    );
+    let source = UdpSocket::bind("127.0.0.1:0").expect("a UDP socket for the beats");
+    let beat = |bpm: f32| encode_osc("/orch/beat", &[OscArg::Float(bpm)]);
+    let (fast, written) = (beat(240.0 * 20.0), beat(240.0));
+
+    let beat_len = Duration::from_millis(BEAT_MS);
+    let next = |within: Duration| {
+        arrivals
+            .recv_timeout(within)
+            .expect("orch conduct stopped sending")
+    };
+    let mut latency = Vec::new();
+    while latency.len() < samples {
+        // Three presses a beat apart (±3 ms): the written tempo, steady.
+        let mut last = next(Duration::from_secs(5));
+        let mut steady = 0;
+        while steady < 3 {
+            let a = next(Duration::from_secs(5));
+            let gap = ms(a - last);
+            steady = if (gap - BEAT_MS as f64).abs() <= 3.0 {
+                steady + 1
+            } else {
+                0
+            };
+            last = a;
+        }
+        let due = last + beat_len;
+        let ahead = AHEAD_US + (latency.len() as u64 * 3_137) % SPREAD_US;
+        std::thread::sleep(
+            (due - Duration::from_micros(ahead)).saturating_duration_since(Instant::now()),
+        );
+        let written_at = Instant::now();
+        source
+            .send_to(&fast, ("127.0.0.1", osc_port))
+            .expect("the beat sent");
+        let arrived = next(Duration::from_secs(2));
+        source
+            .send_to(&written, ("127.0.0.1", osc_port))
+            .expect("the tempo put back");
+        if arrived < written_at {
+            continue; // a press already on its way: not one the beat retimed
+        }
+        latency.push(ms(arrived - written_at));
+        // Let the fast presses and the change back go by.
+        std::thread::sleep(Duration::from_millis(600));
+        while arrivals.try_recv().is_ok() {}
+    }
+    latency.sort_by(f64::total_cmp);
+    let rank =
+        |p: f64| latency[((p * latency.len() as f64).ceil() as usize).clamp(1, latency.len()) - 1];
+    println!(
+        "OSC /orch/beat written on a UDP socket -> the press it retimed sent by orch conduct \
+         (arriving on a UDP socket, same host), {} samples: median {:.2} ms, p99 {:.2} ms, \
+         max {:.2} ms",
+        latency.len(),
+        rank(0.5),
+        rank(0.99),
+        latency[latency.len() - 1]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
