@@ -29,7 +29,8 @@ use orch_atmega16_hil::*;
 const PIECE: &str = "m21-k525short.mid";
 
 /// How far apart the firmware's boards and the virtual copy's may put one press or release,
-/// once the two clocks are aligned on the first press. The two see the same bytes, but: the
+/// once the two clocks are aligned on the first press, beside the lateness orch's sender
+/// reports (a busy host can hold it up; the virtual copy takes every send as on time). The two see the same bytes, but: the
 /// virtual copy's line carries a byte every 320 µs and simavr's every 352 (it counts a parity
 /// bit that 8N1 lacks), 1 ms over a 21-byte chord burst; the pty and the reader add the host's
 /// scheduling (under a millisecond with the sender at real-time priority); simavr's TWI times
@@ -182,6 +183,16 @@ fn the_thesis_chain_orch_play_to_a_pty_to_the_atmega16_in_simavr_to_the_boards()
     let exited = Arc::clone(&orch_exited);
     let reader = std::thread::spawn(move || {
         use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
+        // At real-time priority where the OS allows it, as orch's sender: a stamp taken late
+        // on a busy host would be a byte the firmware gets late.
+        let fifo = thread_priority::ThreadSchedulePolicy::Realtime(
+            thread_priority::RealtimeThreadSchedulePolicy::Fifo,
+        );
+        let _ = thread_priority::set_thread_priority_and_policy(
+            thread_priority::thread_native_id(),
+            thread_priority::ThreadPriority::Max,
+            fifo,
+        );
         use std::os::fd::AsFd;
         let mut buf = [0u8; 256];
         loop {
@@ -279,7 +290,15 @@ fn the_thesis_chain_orch_play_to_a_pty_to_the_atmega16_in_simavr_to_the_boards()
     let (fw, copy) = (key_events(&fw_writes), key_events(&copy_writes));
     let presses = copy.iter().filter(|e| e.down).count();
     assert!(presses > 150, "the piece makes {presses} presses");
-    let diffs = same_as_virtual_copy(&fw, &copy, TOLERANCE_US).unwrap_or_else(|e| panic!("{e}"));
+    // The virtual copy takes every message as sent on time; orch says how late its sender
+    // really was on this host (a busy machine can hold it up), and that much more is allowed.
+    let report: serde_json::Value = serde_json::from_str(report.trim()).unwrap();
+    let sender_late_us = (report["lateness_ms"]["max"]
+        .as_f64()
+        .expect("orch play reports the lateness of what it sent")
+        * 1e3) as u64;
+    let tolerance_us = TOLERANCE_US + sender_late_us;
+    let diffs = same_as_virtual_copy(&fw, &copy, tolerance_us).unwrap_or_else(|e| panic!("{e}"));
 
     // The boards end as the virtual robot does: every key up.
     let mut last = [0u16; 4];
@@ -292,13 +311,13 @@ fn the_thesis_chain_orch_play_to_a_pty_to_the_atmega16_in_simavr_to_the_boards()
     let pct = |p: usize| diffs[(diffs.len() - 1) * p / 100];
     let abs_max = diffs.iter().map(|d| d.unsigned_abs()).max().unwrap_or(0);
     println!(
-        "chain: orch play {PIECE} → pty → {bytes} bytes bridged at DIN pacing → ATmega16 in simavr → 4 PCA9555: {} presses and {} releases, each the virtual copy's; firmware minus copy (aligned on the first press): p1 {} µs, median {} µs, p99 {} µs, at most {abs_max} µs apart; the bridge at most {behind_us} µs behind the wall clock; {wall_s:.1} s",
+        "chain: orch play {PIECE} → pty → {bytes} bytes bridged at DIN pacing → ATmega16 in simavr → 4 PCA9555: {} presses and {} releases, each the virtual copy's; firmware minus copy (aligned on the first press): p1 {} µs, median {} µs, p99 {} µs, at most {abs_max} µs apart; the bridge at most {behind_us} µs behind the wall clock; orch's sender at most {sender_late_us} µs late (allowed: ±{tolerance_us} µs); {wall_s:.1} s",
         presses,
         copy.len() - presses,
         pct(1),
         pct(50),
         pct(99),
     );
-    assert!(report.contains("\"notes\""), "orch play printed its report");
+    assert!(report["notes"].as_u64() > Some(200), "{report}");
     std::fs::remove_dir_all(&dir).ok();
 }
