@@ -88,7 +88,15 @@ pub enum Key {
 /// performance, the tap key of `orch conduct`).
 pub fn keys(mut other: Option<&mut dyn FnMut(Key)>, mut wait: std::time::Duration) -> bool {
     use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
-    while event::poll(wait).unwrap_or(false) {
+    loop {
+        match terminal_input(wait) {
+            Input::HungUp => return true,
+            Input::Nothing => return false,
+            Input::Ready => {}
+        }
+        if !event::poll(std::time::Duration::ZERO).unwrap_or(false) {
+            return false;
+        }
         wait = std::time::Duration::ZERO;
         if let Ok(Event::Key(k)) = event::read() {
             let ctrl_c =
@@ -107,7 +115,43 @@ pub fn keys(mut other: Option<&mut dyn FnMut(Key)>, mut wait: std::time::Duratio
             }
         }
     }
-    false
+}
+
+/// What the terminal has for the view.
+enum Input {
+    /// Bytes to read (or no way to tell: crossterm reads its own terminal).
+    Ready,
+    /// Nothing within the wait.
+    Nothing,
+    /// The terminal has gone (its window closed, tmux killed, an ssh line dropped).
+    HungUp,
+}
+
+/// Waits up to `wait` for the terminal on standard input. A terminal that hung up counts as a
+/// request to stop: crossterm 0.28 would read its end forever (an EIO it retries without
+/// end), so the view never hands a hung-up terminal to it.
+fn terminal_input(wait: std::time::Duration) -> Input {
+    use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
+    use std::os::fd::AsFd;
+    let stdin = io::stdin();
+    if !std::io::IsTerminal::is_terminal(&stdin) {
+        return Input::Ready;
+    }
+    let mut fds = [PollFd::new(stdin.as_fd(), PollFlags::POLLIN)];
+    let ms = PollTimeout::try_from(wait).unwrap_or(PollTimeout::MAX);
+    match poll(&mut fds, ms) {
+        Ok(0) => Input::Nothing,
+        Ok(_) => {
+            let r = fds[0].revents().unwrap_or(PollFlags::empty());
+            if r.intersects(PollFlags::POLLHUP | PollFlags::POLLERR | PollFlags::POLLNVAL) {
+                Input::HungUp
+            } else {
+                Input::Ready
+            }
+        }
+        Err(nix::errno::Errno::EINTR) => Input::Nothing,
+        Err(_) => Input::HungUp,
+    }
 }
 
 impl Drop for View {

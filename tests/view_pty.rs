@@ -237,3 +237,65 @@ fn tap_tempo_in_a_pseudo_terminal_sets_the_tempo_the_taps_give() {
     let took = t0.elapsed().as_secs_f64();
     assert!(took < 10.0, "{took} s");
 }
+
+/// The terminal goes away mid-piece (its window closed, the tmux server killed, an ssh line
+/// dropped): orch stops at once and lets every key go, on a MIDI output too, instead of
+/// reading the dead terminal forever (crossterm alone spins on its EIO: the view used to keep
+/// a core busy after the piece, for ever).
+#[test]
+fn a_terminal_that_hangs_up_stops_the_performance_and_releases_every_key() {
+    let file = scratch("long.mid", &quarters_file(120, 60.0));
+    let pidfile = std::env::temp_dir().join(format!("orch-view-pid-{}", std::process::id()));
+    let _ = std::fs::remove_file(&pidfile);
+    let socket = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    socket
+        .set_read_timeout(Some(Duration::from_millis(200)))
+        .unwrap();
+    let port = socket.local_addr().unwrap().port();
+    let tmux = Tmux::start(
+        "hangup",
+        &format!(
+            "sh -c 'echo $$ > {}; exec {} play {} --out sim --out udp:127.0.0.1:{port}'",
+            pidfile.display(),
+            env!("CARGO_BIN_EXE_orch"),
+            file.display()
+        ),
+    );
+    tmux.wait_for("orch play", Duration::from_secs(20));
+    let pid: i32 = std::fs::read_to_string(&pidfile)
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
+    sleep(Duration::from_millis(1500));
+    drop(tmux); // kill-server: the terminal hangs up
+    let gone = Instant::now();
+    let alive = || {
+        std::path::Path::new(&format!("/proc/{pid}")).exists() && {
+            // A zombie has exited; only its parent has not looked yet.
+            let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+            !stat.contains(") Z ")
+        }
+    };
+    while alive() {
+        if gone.elapsed() > Duration::from_secs(5) {
+            let _ = nix::sys::signal::kill(
+                nix::unistd::Pid::from_raw(pid),
+                nix::sys::signal::Signal::SIGKILL,
+            );
+            panic!("orch play still ran 5 s after its terminal went away");
+        }
+        sleep(Duration::from_millis(20));
+    }
+    let mut got = Vec::new();
+    let mut buf = [0u8; 512];
+    while let Ok(n) = socket.recv(&mut buf) {
+        got.extend_from_slice(&buf[..n]);
+    }
+    let all_notes_off = got.windows(3).any(|w| w == [0xB0, 123, 0]);
+    assert!(
+        all_notes_off,
+        "no All Notes Off on the MIDI output: {got:02x?}"
+    );
+    std::fs::remove_file(&pidfile).ok();
+}
