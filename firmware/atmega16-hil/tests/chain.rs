@@ -29,13 +29,14 @@ use orch_atmega16_hil::*;
 const PIECE: &str = "m21-k525short.mid";
 
 /// How far apart the firmware's boards and the virtual copy's may put one press or release,
-/// once the two clocks are aligned on the first press, beside the lateness orch's sender
-/// reports (a busy host can hold it up; the virtual copy takes every send as on time). The two see the same bytes, but: the
+/// once the two clocks are aligned on the first press. The two see the same bytes, but: the
 /// virtual copy's line carries a byte every 320 µs and simavr's every 352 (it counts a parity
-/// bit that 8N1 lacks), 1 ms over a 21-byte chord burst; the pty and the reader add the host's
-/// scheduling (under a millisecond with the sender at real-time priority); simavr's TWI times
-/// a write a little shorter than the real bus. 4 ms is 12 DIN bytes.
-const TOLERANCE_US: u64 = 4_000;
+/// bit that 8N1 lacks), 1 ms over a 21-byte chord burst; the virtual copy takes every message
+/// as sent on time, where the host schedules orch's sender, the pty and the bridge's reader
+/// (seen: at most 1.3–3.7 ms apart on this machine, 8.7 ms once under a load average of 10);
+/// simavr's TWI times a write a little shorter than the real bus. 10 ms is 31 DIN bytes: far
+/// below what a guard decision moves a key (a 20 ms shortest press, a 60 ms rest).
+const TOLERANCE_US: u64 = 10_000;
 
 /// The robot the firmware is: the thesis's board (`Config::THESIS`), its bus at 83.33 kHz,
 /// no duty limit (the firmware is built without it).
@@ -290,15 +291,14 @@ fn the_thesis_chain_orch_play_to_a_pty_to_the_atmega16_in_simavr_to_the_boards()
     let (fw, copy) = (key_events(&fw_writes), key_events(&copy_writes));
     let presses = copy.iter().filter(|e| e.down).count();
     assert!(presses > 150, "the piece makes {presses} presses");
-    // The virtual copy takes every message as sent on time; orch says how late its sender
-    // really was on this host (a busy machine can hold it up), and that much more is allowed.
+    // How late orch's sender says it was (for a DIN line this includes each message's wait
+    // for the wire inside a chord's burst, which the virtual copy models too): printed.
     let report: serde_json::Value = serde_json::from_str(report.trim()).unwrap();
     let sender_late_us = (report["lateness_ms"]["max"]
         .as_f64()
         .expect("orch play reports the lateness of what it sent")
         * 1e3) as u64;
-    let tolerance_us = TOLERANCE_US + sender_late_us;
-    let diffs = same_as_virtual_copy(&fw, &copy, tolerance_us).unwrap_or_else(|e| panic!("{e}"));
+    let diffs = same_as_virtual_copy(&fw, &copy, TOLERANCE_US).unwrap_or_else(|e| panic!("{e}"));
 
     // The boards end as the virtual robot does: every key up.
     let mut last = [0u16; 4];
@@ -311,7 +311,7 @@ fn the_thesis_chain_orch_play_to_a_pty_to_the_atmega16_in_simavr_to_the_boards()
     let pct = |p: usize| diffs[(diffs.len() - 1) * p / 100];
     let abs_max = diffs.iter().map(|d| d.unsigned_abs()).max().unwrap_or(0);
     println!(
-        "chain: orch play {PIECE} → pty → {bytes} bytes bridged at DIN pacing → ATmega16 in simavr → 4 PCA9555: {} presses and {} releases, each the virtual copy's; firmware minus copy (aligned on the first press): p1 {} µs, median {} µs, p99 {} µs, at most {abs_max} µs apart; the bridge at most {behind_us} µs behind the wall clock; orch's sender at most {sender_late_us} µs late (allowed: ±{tolerance_us} µs); {wall_s:.1} s",
+        "chain: orch play {PIECE} → pty → {bytes} bytes bridged at DIN pacing → ATmega16 in simavr → 4 PCA9555: {} presses and {} releases, each the virtual copy's; firmware minus copy (aligned on the first press): p1 {} µs, median {} µs, p99 {} µs, at most {abs_max} µs apart; the bridge at most {behind_us} µs behind the wall clock; orch's sender at most {sender_late_us} µs late (wire waits included); allowed ±{TOLERANCE_US} µs; {wall_s:.1} s",
         presses,
         copy.len() - presses,
         pct(1),
