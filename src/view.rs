@@ -89,12 +89,13 @@ pub enum Key {
 pub fn keys(mut other: Option<&mut dyn FnMut(Key)>, mut wait: std::time::Duration) -> bool {
     use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
     loop {
-        match terminal_input(wait) {
+        let crossterm_wait = match terminal_input(wait) {
             Input::HungUp => return true,
             Input::Nothing => return false,
-            Input::Ready => {}
-        }
-        if !event::poll(std::time::Duration::ZERO).unwrap_or(false) {
+            Input::Ready => std::time::Duration::ZERO,
+            Input::NotStdin => wait,
+        };
+        if !event::poll(crossterm_wait).unwrap_or(false) {
             return false;
         }
         wait = std::time::Duration::ZERO;
@@ -119,8 +120,10 @@ pub fn keys(mut other: Option<&mut dyn FnMut(Key)>, mut wait: std::time::Duratio
 
 /// What the terminal has for the view.
 enum Input {
-    /// Bytes to read (or no way to tell: crossterm reads its own terminal).
+    /// Bytes to read.
     Ready,
+    /// Standard input is not the terminal (crossterm reads `/dev/tty` itself): no way to tell.
+    NotStdin,
     /// Nothing within the wait.
     Nothing,
     /// The terminal has gone (its window closed, tmux killed, an ssh line dropped).
@@ -135,7 +138,7 @@ fn terminal_input(wait: std::time::Duration) -> Input {
     use std::os::fd::AsFd;
     let stdin = io::stdin();
     if !std::io::IsTerminal::is_terminal(&stdin) {
-        return Input::Ready;
+        return Input::NotStdin;
     }
     let mut fds = [PollFd::new(stdin.as_fd(), PollFlags::POLLIN)];
     let ms = PollTimeout::try_from(wait).unwrap_or(PollTimeout::MAX);
