@@ -100,6 +100,14 @@ fn virtual_writes(path: &std::path::Path) -> Vec<TimedWrite> {
         .collect()
 }
 
+/// How the firmware's boards and the virtual copy's differ.
+enum Mismatch {
+    /// Not the same presses and releases, key by key and in order: always a failure.
+    Sequence(String),
+    /// The same, but one further apart in time than allowed.
+    Timing(String),
+}
+
 /// Every key's presses and releases on the firmware's boards are the virtual copy's, in the
 /// same order, none missing and none extra, each within `tolerance_us` of the virtual copy's
 /// once both are measured from their first press. Returns each event's difference (µs,
@@ -108,36 +116,38 @@ fn same_as_virtual_copy(
     firmware: &[KeyEvent],
     copy: &[KeyEvent],
     tolerance_us: u64,
-) -> Result<Vec<i64>, String> {
+) -> Result<Vec<i64>, Mismatch> {
     let first = |events: &[KeyEvent]| events.iter().find(|e| e.down).map(|e| e.t_us as i64);
     let (Some(f0), Some(c0)) = (first(firmware), first(copy)) else {
-        return Err("no press on one side".into());
+        return Err(Mismatch::Sequence("no press on one side".into()));
     };
     let mut diffs = Vec::new();
     for key in 0..64 {
         let fk: Vec<&KeyEvent> = firmware.iter().filter(|e| e.key == key).collect();
         let ck: Vec<&KeyEvent> = copy.iter().filter(|e| e.key == key).collect();
         if fk.len() != ck.len() {
-            return Err(format!(
+            return Err(Mismatch::Sequence(format!(
                 "key {key}: {} presses and releases on the firmware's boards, {} on the virtual copy's\n firmware: {:?}\n copy: {:?}",
                 fk.len(),
                 ck.len(),
                 fk.iter().map(|e| (e.t_us as i64 - f0, e.down)).collect::<Vec<_>>(),
                 ck.iter().map(|e| (e.t_us as i64 - c0, e.down)).collect::<Vec<_>>()
-            ));
+            )));
         }
         for (i, (f, c)) in fk.iter().zip(&ck).enumerate() {
             let what = if c.down { "press" } else { "release" };
             if f.down != c.down {
-                return Err(format!("key {key}: event #{i} differs in kind"));
+                return Err(Mismatch::Sequence(format!(
+                    "key {key}: event #{i} differs in kind"
+                )));
             }
             let d = (f.t_us as i64 - f0) - (c.t_us as i64 - c0);
             if d.unsigned_abs() > tolerance_us {
-                return Err(format!(
+                return Err(Mismatch::Timing(format!(
                     "key {key}: {what} #{i} at {} µs on the firmware's boards, {} µs on the virtual copy's (from their first press): {d} µs apart, allowed ±{tolerance_us}",
                     f.t_us as i64 - f0,
                     c.t_us as i64 - c0
-                ));
+                )));
             }
             diffs.push(d);
         }
@@ -146,8 +156,23 @@ fn same_as_virtual_copy(
     Ok(diffs)
 }
 
+/// The chain runs in real time on a shared host: a run whose timing alone is off (every press
+/// and release right, one further from the virtual copy's than allowed: the host held orch's
+/// sender or the pty up) is said on standard error and played once more; a second such run,
+/// or any other difference, fails.
 #[test]
 fn the_thesis_chain_orch_play_to_a_pty_to_the_atmega16_in_simavr_to_the_boards() {
+    if let Err(first) = play_the_chain() {
+        eprintln!("chain: the timing was off on this host ({first}); playing it once more");
+        if let Err(second) = play_the_chain() {
+            panic!("the timing was off twice:\n first: {first}\n second: {second}");
+        }
+    }
+}
+
+/// One performance through the whole chain. Panics on any difference but timing, which it
+/// returns.
+fn play_the_chain() -> Result<(), String> {
     let dir = std::env::temp_dir().join(format!("orch-chain-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let robot = dir.join("robot.toml");
@@ -298,7 +323,17 @@ fn the_thesis_chain_orch_play_to_a_pty_to_the_atmega16_in_simavr_to_the_boards()
         .as_f64()
         .expect("orch play reports the lateness of what it sent")
         * 1e3) as u64;
-    let diffs = same_as_virtual_copy(&fw, &copy, TOLERANCE_US).unwrap_or_else(|e| panic!("{e}"));
+    let diffs = match same_as_virtual_copy(&fw, &copy, TOLERANCE_US) {
+        Ok(d) => d,
+        Err(Mismatch::Sequence(e)) => panic!("{e}"),
+        Err(Mismatch::Timing(e)) => {
+            std::fs::remove_dir_all(&dir).ok();
+            return Err(format!(
+                "{e}; orch's sender at most {sender_late_us} µs late (wire waits included), the \
+                 bridge at most {behind_us} µs behind the wall clock"
+            ));
+        }
+    };
 
     // The boards end as the virtual robot does: every key up.
     let mut last = [0u16; 4];
@@ -320,4 +355,5 @@ fn the_thesis_chain_orch_play_to_a_pty_to_the_atmega16_in_simavr_to_the_boards()
     );
     assert!(report["notes"].as_u64() > Some(200), "{report}");
     std::fs::remove_dir_all(&dir).ok();
+    Ok(())
 }
