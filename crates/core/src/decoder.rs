@@ -26,7 +26,9 @@ use crate::values::{Channel, Note, Velocity, U14, U7};
 
 /// What the decoder has seen, for a builder who wants to know whether the line is noisy.
 ///
-/// Counts wrap at 2³² (about 16 days of a saturated DIN line).
+/// Counts wrap at 2³² (about 16 days of a saturated DIN line). Kept with the `stats` feature
+/// (on by default); without it nothing is counted and every count reads 0 (an 8-bit MCU saves
+/// four 32-bit increments' worth of work a byte and 16 bytes of RAM).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Counters {
     /// Bytes fed in.
@@ -96,6 +98,7 @@ pub struct Decoder<const SYSEX: usize = 0> {
     in_sysex: bool,
     sysex_len: u32,
     sysex: [u8; SYSEX],
+    #[cfg(feature = "stats")]
     counters: Counters,
 }
 
@@ -104,6 +107,14 @@ impl<const SYSEX: usize> Default for Decoder<SYSEX> {
         Self::new()
     }
 }
+
+/// Every count 0.
+const NO_COUNTS: Counters = Counters {
+    bytes: 0,
+    messages: 0,
+    dropped: 0,
+    abandoned: 0,
+};
 
 /// How many data bytes follow `status`, for statuses that take data.
 const fn data_len(status: u8) -> u8 {
@@ -131,18 +142,29 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
             in_sysex: false,
             sysex_len: 0,
             sysex: [0; SYSEX],
-            counters: Counters {
-                bytes: 0,
-                messages: 0,
-                dropped: 0,
-                abandoned: 0,
-            },
+            #[cfg(feature = "stats")]
+            counters: NO_COUNTS,
         }
     }
 
-    /// The counters so far.
+    /// The counters so far (all 0 without the `stats` feature).
     pub const fn counters(&self) -> Counters {
-        self.counters
+        #[cfg(feature = "stats")]
+        return self.counters;
+        #[cfg(not(feature = "stats"))]
+        return NO_COUNTS;
+    }
+
+    /// Adds one to a count; nothing without the `stats` feature.
+    #[inline(always)]
+    fn count(&mut self, f: impl FnOnce(&mut Counters) -> &mut u32) {
+        #[cfg(feature = "stats")]
+        {
+            let n = f(&mut self.counters);
+            *n = n.wrapping_add(1);
+        }
+        #[cfg(not(feature = "stats"))]
+        let _ = f;
     }
 
     /// Whether a System Exclusive message is being received.
@@ -180,9 +202,13 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
     /// Forgets any message in progress and the running status, as after power-up.
     /// The counters are kept.
     pub fn reset(&mut self) {
+        #[cfg(feature = "stats")]
         let counters = self.counters;
         *self = Self::new();
-        self.counters = counters;
+        #[cfg(feature = "stats")]
+        {
+            self.counters = counters;
+        }
     }
 
     /// Feeds every byte of `bytes`, calling `emit` for each message in order.
@@ -201,7 +227,7 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
 
     #[inline(always)]
     fn step<F: FnMut(Message)>(&mut self, byte: u8, emit: &mut F) {
-        self.counters.bytes = self.counters.bytes.wrapping_add(1);
+        self.count(|c| &mut c.bytes);
         if byte < 0x80 {
             self.data_byte(byte, emit);
         } else if byte == 0xFF {
@@ -218,7 +244,7 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
     #[inline(always)]
     fn emit<F: FnMut(Message)>(&mut self, emit: &mut F, message: Message) {
         if message != Message::SysExStart {
-            self.counters.messages = self.counters.messages.wrapping_add(1);
+            self.count(|c| &mut c.messages);
         }
         emit(message);
     }
@@ -249,7 +275,7 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
                 return;
             }
         } else if self.pending {
-            self.counters.abandoned = self.counters.abandoned.wrapping_add(1);
+            self.count(|c| &mut c.abandoned);
         }
         self.pending = false;
         self.forget_status = false;
@@ -282,7 +308,7 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
             return;
         }
         if self.status == 0 {
-            self.counters.dropped = self.counters.dropped.wrapping_add(1);
+            self.count(|c| &mut c.dropped);
             return;
         }
         self.pending = true;

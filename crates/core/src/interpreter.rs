@@ -29,46 +29,68 @@ pub enum KeyPhase {
     Down,
 }
 
-/// An instant kept with its bits inverted, so that "never" (`u64::MAX`) is all zero bits:
-/// with these fields at never and a constant configuration, the interpreter's initial state is
-/// all zeros, and an MCU keeps it in `.bss` instead of copying it from flash.
+/// A deadline kept in 32 bits: the low 32 bits of its instant, compared with the clock's by
+/// wrapping difference, or never. Every kept deadline lies less than 2³¹ µs (35 minutes) from
+/// the clock: at the end of every call it is ahead of the clock by at most the longest limit
+/// ([`MAX_LIMIT`](crate::MAX_LIMIT), 30 minutes) or has just passed, and a jump of the clock
+/// that could take it out of reach is seen by [`advance`](Interpreter::advance), which marks
+/// it passed ([`Kept::reach`]). So the interpreter's per-byte work on time is 32-bit (an 8-bit
+/// MCU's loads, stores and compares of a 64-bit instant were a fifth of its cycles), and the
+/// answers are those of 64-bit instants. "Never" is all zero bits, so that with a constant
+/// configuration the interpreter's initial state is all zeros and an MCU keeps it in `.bss`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Kept(u64);
+struct Kept {
+    /// The low 32 bits of the instant.
+    at: u32,
+    /// Whether a deadline is kept at all.
+    set: bool,
+}
 
 impl Kept {
-    const NEVER: Self = Self(0);
+    const NEVER: Self = Self { at: 0, set: false };
 
+    /// The deadline at `at`, the low 32 bits of an instant.
     #[inline(always)]
-    fn new(t: Instant) -> Self {
-        Self(!t.as_micros())
+    const fn at(at: u32) -> Self {
+        Self { at, set: true }
     }
 
+    /// The instant, given the clock it lies within 2³¹ µs of.
     #[inline(always)]
-    fn get(self) -> Instant {
-        Instant::from_micros(!self.0)
+    fn get(self, clock: Instant) -> Instant {
+        let ahead = self.at.wrapping_sub(clock.low32()) as i32;
+        Instant::from_micros(clock.as_micros().wrapping_add_signed(ahead as i64))
     }
 
-    /// The earlier of `self` and `t`.
+    /// The earlier of `self` and `t` (the low 32 bits of an instant near the clock).
     #[inline(always)]
-    fn min(self, t: Instant) -> Self {
-        Self(self.0.max(!t.as_micros()))
+    fn min(self, t: u32) -> Self {
+        if !self.set || (t.wrapping_sub(self.at) as i32) < 0 {
+            Self::at(t)
+        } else {
+            self
+        }
     }
 
-    /// Whether `now` is at or past the kept instant (never for [`Kept::NEVER`]).
+    /// Whether `now` (the low 32 bits of the clock) is at or past the kept instant (never for
+    /// [`Kept::NEVER`]).
     #[inline(always)]
-    fn passed(self, now: Instant) -> bool {
-        // now >= t  <=>  !now <= !t
-        !now.as_micros() <= self.0
+    fn passed(self, now: u32) -> bool {
+        self.set && now.wrapping_sub(self.at) as i32 >= 0
     }
 
-    /// The earlier of `self` and `t + d` (saturating at never, as `Instant + Duration`).
+    /// After the clock jumped from `before` by `jump` µs (a cold path: a jump past a multiple
+    /// of 2³⁰ µs): a deadline the jump reached or passed is kept as passed at `now`, so that it
+    /// stays within reach of the clock whatever the jump (its exact instant no longer
+    /// matters: the next call runs what falls due, at `now`).
     #[inline(always)]
-    fn min_after(self, t: Instant, d: Duration) -> Self {
-        // !(t + d) = !t - d, and a sum past the end of time saturates to never (0).
-        Self(
-            self.0
-                .max((!t.as_micros()).saturating_sub(d.as_micros() as u64)),
-        )
+    fn reach(self, before: Instant, jump: u64, now: Instant) -> Self {
+        let ahead = self.at.wrapping_sub(before.low32()) as i32;
+        if self.set && (ahead <= 0 || jump >= ahead as u64) {
+            Self::at(now.low32())
+        } else {
+            self
+        }
     }
 }
 
@@ -119,8 +141,9 @@ pub struct Interpreter<
     pedals: u16,
     /// The clock as last seen.
     clock: Instant,
-    /// When the last input arrived.
-    last_input: Instant,
+    /// When the last input arrived: the low 32 bits, clamped like the keys' stamps so that
+    /// its age never wraps.
+    last_input: u32,
     /// An Active Sensing byte was seen and the 300 ms rule is in force.
     sensing: bool,
     /// No per-key deadline falls before this ([`Kept::NEVER`] if none runs).
@@ -196,7 +219,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             frame: FingerFrame::new(),
             pedals: 0,
             clock: Instant::ZERO,
-            last_input: Instant::ZERO,
+            last_input: 0,
             sensing: false,
             due: Kept::NEVER,
             wake: Kept::NEVER,
@@ -312,7 +335,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     pub fn feed_with<S: NoteSink>(&mut self, byte: u8, now: Instant, sink: &mut S) {
         self.tick_with(now, sink);
         let now = self.clock;
-        self.last_input = now;
+        self.last_input = now.low32();
         for message in self.decoder.push(byte) {
             self.apply(message, now, sink);
         }
@@ -340,7 +363,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     pub fn handle_with<S: NoteSink>(&mut self, message: Message, now: Instant, sink: &mut S) {
         self.tick_with(now, sink);
         let now = self.clock;
-        self.last_input = now;
+        self.last_input = now.low32();
         self.apply(message, now, sink);
         self.refresh();
     }
@@ -381,7 +404,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         // With no key down or waiting, the quiet rules have nothing to cut: only `due`.
         let busy = self.fingers.down + self.fingers.pending > 0;
         let deadline = if busy { self.wake } else { self.due };
-        (deadline != Kept::NEVER).then_some(deadline.get())
+        deadline.set.then(|| deadline.get(self.clock))
     }
 
     /// Recomputes [`wake`](Self::wake) from `due`,
@@ -403,7 +426,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                     Some(quiet.map_or(ACTIVE_SENSING_TIMEOUT, |wd| wd.min(ACTIVE_SENSING_TIMEOUT)));
             }
             if let Some(quiet) = quiet {
-                wake = wake.min_after(self.last_input, quiet);
+                wake = wake.min(self.last_input.wrapping_add(quiet.as_micros()));
             }
         }
         // Stored once (64-bit stores are dear on 8-bit MCUs).
@@ -423,7 +446,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         self.advance(now);
         // Nothing can be due before `wake`: one compare on every byte fed (inlined there; the
         // timers' work is not).
-        if !self.wake.passed(self.clock) {
+        if !self.wake.passed(self.clock.low32()) {
             return;
         }
         self.run_due(sink);
@@ -455,9 +478,9 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             return;
         }
         let busy = self.fingers.down + self.fingers.pending > 0;
-        let quiet = now.saturating_since(self.last_input);
-        let starved = g.watchdog.is_some_and(|wd| quiet >= wd.as_micros() as u64)
-            || (self.sensing && quiet >= ACTIVE_SENSING_TIMEOUT.as_micros() as u64);
+        let quiet = now.low32().wrapping_sub(self.last_input);
+        let starved = g.watchdog.is_some_and(|wd| quiet >= wd.as_micros())
+            || (self.sensing && quiet >= ACTIVE_SENSING_TIMEOUT.as_micros());
         if starved {
             self.sensing = false;
             if busy {
@@ -466,7 +489,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 self.release_everything(now, DropReason::Cancelled, sink);
             }
         }
-        if !self.due.passed(now) && !every_key {
+        if !self.due.passed(now.low32()) && !every_key {
             return;
         }
         let g = &self.config.guard;
@@ -533,7 +556,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 soonest(gap - age);
             }
         }
-        self.due = next.map_or(Kept::NEVER, |n| Kept::new(now + Duration::from_micros(n)));
+        self.due = next.map_or(Kept::NEVER, |n| Kept::at(now.low32().wrapping_add(n)));
     }
 
     fn keys(&self) -> u8 {
@@ -565,12 +588,22 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         // passes a multiple of 2³⁰ µs). Ages can be up to 1.5 × cap just before a clamp, so a
         // jump of up to a cap on top of that would wrap 32 bits: clamp at the time before the
         // jump first.
-        if now.saturating_since(before) >= AGE_CAP as u64 {
+        let jump = now.saturating_since(before);
+        if jump >= AGE_CAP as u64 {
             self.fingers.clamp_ages(now, true);
+            self.last_input = now.low32().wrapping_sub(AGE_CAP);
         } else {
             self.fingers.clamp_ages(before, false);
             self.fingers.clamp_ages(now, false);
+            for at in [before, now] {
+                if at.low32().wrapping_sub(self.last_input) >= AGE_CAP {
+                    self.last_input = at.low32().wrapping_sub(AGE_CAP);
+                }
+            }
         }
+        // The kept deadlines: one the jump reached is passed, at `now`.
+        self.due = self.due.reach(before, jump, now);
+        self.wake = self.wake.reach(before, jump, now);
     }
 
     /// The duty limit, if any. Always `None` without the `duty-limit` feature (a configuration
@@ -845,7 +878,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             self.fingers.set_phase(key, PENDING);
             self.fingers.set_flag(key, FOLDED, folded);
             self.count(|s| s.restrikes_delayed += 1);
-            self.due = self.due.min(now + Duration::from_micros(wait));
+            self.due = self.due.min(now.low32().wrapping_add(wait));
             false
         } else {
             self.count_sounded(folded);
@@ -855,7 +888,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 .map_or(u32::MAX, Duration::as_micros)
                 .min(self.duty_cut_after(key).unwrap_or(u32::MAX));
             if g.enabled && limit != u32::MAX {
-                self.due = self.due.min(now + Duration::from_micros(limit));
+                self.due = self.due.min(now.low32().wrapping_add(limit));
             }
             true
         }
@@ -904,7 +937,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 let min = g.min_press.as_micros();
                 if unwritten && g.enabled && age < min {
                     self.fingers.set_flag(key, RELEASE_AFTER, true);
-                    self.due = self.due.min(now + Duration::from_micros(min - age));
+                    self.due = self.due.min(now.low32().wrapping_add(min - age));
                 } else {
                     self.release_now(key, now);
                 }

@@ -119,6 +119,14 @@ fn main() {
             symbols.get(i).map_or("(no symbol)", |s| s.2.as_str())
         );
     }
+    if let Some(path) = std::env::var_os("ORCH_PROFILE_PCS") {
+        // Busy cycles by program counter, one `address cycles` line each, for annotating
+        // `avr-objdump -d`.
+        let mut pcs: Vec<(u32, u64)> = busy_pc.iter().map(|(&a, &c)| (a, c)).collect();
+        pcs.sort();
+        let text: String = pcs.iter().map(|(a, c)| format!("{a:x} {c}\n")).collect();
+        std::fs::write(path, text).expect("ORCH_PROFILE_PCS: a writable path");
+    }
     if std::env::var_os("ORCH_PROFILE_LINES").is_some() {
         // Busy cycles by source line (innermost inlined frame), largest first.
         let mut pcs: Vec<(u32, u64)> = busy_pc.into_iter().collect();
