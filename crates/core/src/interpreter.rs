@@ -327,19 +327,37 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     }
 
     /// Feeds one received byte at time `now`.
-    pub fn feed(&mut self, byte: u8, now: Instant) {
-        self.feed_with(byte, now, &mut ());
+    ///
+    /// Returns whether anything beyond the decoder's state and the clock may have changed:
+    /// `true` when the byte completed a message or the guard's timers ran (flush then, and ask
+    /// [`next_deadline`](Self::next_deadline) again); `false` for a byte that only began or
+    /// continued a message (a status byte, a first data byte, SysEx data), after which the
+    /// frame and `next_deadline` are as they were. A firmware skips its flush check on those,
+    /// two bytes of every three-byte message.
+    pub fn feed(&mut self, byte: u8, now: Instant) -> bool {
+        self.feed_with(byte, now, &mut ())
     }
 
     /// [`feed`](Self::feed), telling `sink` what became of each note ([`NoteEvent`]).
-    pub fn feed_with<S: NoteSink>(&mut self, byte: u8, now: Instant, sink: &mut S) {
-        self.tick_with(now, sink);
+    pub fn feed_with<S: NoteSink>(&mut self, byte: u8, now: Instant, sink: &mut S) -> bool {
+        self.advance(now);
+        let mut changed = self.wake.passed(self.clock.low32());
+        if changed {
+            self.run_due(sink);
+        }
         let now = self.clock;
         self.last_input = now.low32();
         for message in self.decoder.push(byte) {
+            changed = true;
             self.apply(message, now, sink);
         }
-        self.refresh();
+        // A byte that completes no message moved only the last input, which moves the quiet
+        // rules' deadline later: `wake` stays as it is, early rather than late (a tick then
+        // finds nothing to do and sets it anew).
+        if changed {
+            self.refresh();
+        }
+        changed
     }
 
     /// Feeds bytes that all arrived at `now`.
@@ -1018,6 +1036,31 @@ mod tests {
         assert_eq!(i.stats().dropped_power, 1);
         i.feed_slice(&[0x80, 62, 0, 60, 0], Instant::ZERO);
         assert_eq!(i.keys_down(), 1);
+    }
+
+    #[test]
+    fn feed_says_whether_a_byte_completed_a_message_or_a_timer_ran() {
+        let mut i = Interpreter::<4, 61, NotePool<32>>::new(Config::THESIS).unwrap();
+        let t = Instant::from_micros;
+        let steps: [(u8, u64, bool); 12] = [
+            (0x90, 0, false),    // a status byte
+            (60, 320, false),    // a first data byte
+            (100, 640, true),    // the Note-On
+            (64, 960, false),    // running status
+            (0xF8, 1_000, true), // a real-time byte inside it is a message
+            (100, 1_280, true),
+            (0xF0, 1_600, true), // SysEx starts
+            (0x7E, 1_920, false),
+            (0xF7, 2_240, true), // and ends
+            (0x80, 2_560, false),
+            // The watchdog fell due meanwhile (4 s): its timer runs before this byte.
+            (60, 4_100_000, true),
+            (0, 4_100_320, true),
+        ];
+        for (byte, at, changed) in steps {
+            assert_eq!(i.feed(byte, t(at)), changed, "{byte:#04x} at {at} µs");
+        }
+        assert_eq!(i.keys_down(), 0, "the watchdog released both");
     }
 
     #[test]

@@ -98,7 +98,7 @@ fn start() -> impl Strategy<Value = u64> {
     ]
 }
 
-/// Ticks only at `next_deadline()`, as the firmware does.
+/// Ticks only at `next_deadline()`, as the firmware does, and checks what `feed` says.
 fn run_at_deadlines(config: Config<4>, start: u64, chunks: &[(u64, Vec<u8>)], end: u64) -> Run {
     let mut robot = Robot::new(config).unwrap();
     let mut run = Run::default();
@@ -120,8 +120,24 @@ fn run_at_deadlines(config: Config<4>, start: u64, chunks: &[(u64, Vec<u8>)], en
         t += gap * 1000;
         until(&mut robot, &mut run, t);
         let now = Instant::from_micros(t);
-        let mut sink = |e| run.events.push((t, e));
-        robot.feed_slice_with(bytes, now, &mut sink);
+        // Byte by byte: where `feed` says nothing changed, the frame and the deadline are as
+        // they were (so the ATmega16 firmware skips its flush check and its deadline there).
+        for &byte in bytes {
+            let (frame, deadline) = (*robot.frame(), robot.next_deadline());
+            let mut sink = |e| run.events.push((t, e));
+            if !robot.feed_with(byte, now, &mut sink) {
+                assert_eq!(
+                    robot.frame(),
+                    &frame,
+                    "feed({byte:#04x}) said nothing changed"
+                );
+                assert_eq!(
+                    robot.next_deadline(),
+                    deadline,
+                    "feed({byte:#04x}) said nothing changed"
+                );
+            }
+        }
         run.flush(&mut robot, now);
     }
     until(&mut robot, &mut run, end);

@@ -132,9 +132,12 @@ fn main() -> ! {
                 tick(robot, deadline);
                 deadline = next_deadline(robot);
             }
-            robot.feed(byte, Instant::from_micros(at));
-            flush(robot);
-            deadline = next_deadline(robot);
+            // Most bytes only begin or continue a message: the frame and the deadline are as
+            // they were.
+            if robot.feed(byte, Instant::from_micros(at)) {
+                flush(robot);
+                deadline = next_deadline(robot);
+            }
             probe::work(false);
             continue;
         }
