@@ -179,6 +179,21 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
         self.pending || self.in_sysex
     }
 
+    /// A Note-On or Note-Off that waits only for its last data byte (the velocity): its
+    /// channel and note. Real-time bytes may come between; anything else ends the wait. A
+    /// firmware can address the note's board on the bus while that byte is still on the wire
+    /// ([`Interpreter::board_ahead`](crate::Interpreter::board_ahead)).
+    pub const fn note_ahead(&self) -> Option<(Channel, Note)> {
+        if self.pending && !self.in_sysex && self.have == 1 && self.status & 0xE0 == 0x80 {
+            Some((
+                Channel::from_status(self.status),
+                Note::from_bits(self.data[0] & 0x7F),
+            ))
+        } else {
+            None
+        }
+    }
+
     /// Says the input has ended (end of file, a closed port) and returns whether it cut a
     /// message off (a System Exclusive message too): [`pending`](Self::pending) before the
     /// end. Nothing is emitted for that message and it is not counted as abandoned; the

@@ -8,7 +8,7 @@ use crate::held::{HeldNotes, NoteTable};
 use crate::keymap::KeyOf;
 use crate::message::Message;
 use crate::outcome::{DropReason, Landing, NoteEvent, NoteSink};
-use crate::output::FingerBoards;
+use crate::output::{BoardId, FingerBoards};
 use crate::stats::Stats;
 use crate::time::{Duration, Instant};
 use crate::values::{Channel, Note, Velocity};
@@ -319,6 +319,29 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// (on/off boards ignore it).
     pub fn velocity(&self, key: u8) -> Velocity {
         Velocity::from_bits(self.fingers.velocity(key))
+    }
+
+    /// The board that the Note-On or Note-Off now waiting for its last byte would write
+    /// ([`Decoder::note_ahead`]), if its channel is played and its note lands on a key. Whether
+    /// it will change anything is only known once the byte is in (the guard may drop the
+    /// note, a Note-Off may end no note): a firmware may address the board on the bus ahead,
+    /// hold the bus, and send the outputs if [`flush`](Self::flush) writes that board next,
+    /// or end the transaction with no data if it does not.
+    pub fn board_ahead(&self) -> Option<BoardId> {
+        let (channel, note) = self.decoder.note_ahead()?;
+        if !self.config.channels.contains(channel) {
+            return None;
+        }
+        let key = self
+            .config
+            .range
+            .key_for(note, self.config.out_of_range)?
+            .key;
+        let f = self.config.layout.finger(key)?;
+        Some(BoardId {
+            index: f.board,
+            address: self.config.layout.boards[f.board as usize].address,
+        })
     }
 
     /// Writes every board whose outputs changed. See [`FingerFrame::flush`].
@@ -1061,6 +1084,48 @@ mod tests {
             assert_eq!(i.feed(byte, t(at)), changed, "{byte:#04x} at {at} µs");
         }
         assert_eq!(i.keys_down(), 0, "the watchdog released both");
+    }
+
+    #[test]
+    fn board_ahead_names_the_board_of_a_note_waiting_for_its_velocity() {
+        let config = Config {
+            channels: crate::ChannelMask(0x7FFF), // channel 16 not played
+            ..Config::THESIS
+        };
+        let mut i = Interpreter::<4, 61, NotePool<32>>::new(config).unwrap();
+        let board = |i: &Interpreter<4, 61, NotePool<32>>| i.board_ahead().map(|b| b.index);
+        let t = Instant::ZERO;
+        i.feed(0x90, t);
+        assert_eq!(board(&i), None, "no note yet");
+        i.feed(60, t); // key 24: board 1
+        assert_eq!(
+            i.board_ahead(),
+            Some(BoardId {
+                index: 1,
+                address: 0x22
+            })
+        );
+        i.feed(0xF8, t);
+        assert_eq!(board(&i), Some(1), "a real-time byte keeps it waiting");
+        i.feed(100, t);
+        assert_eq!(board(&i), None, "complete");
+        i.feed(96, t); // running status: key 60, board 3
+        assert_eq!(board(&i), Some(3));
+        i.feed(0, t);
+        i.feed(0x80, t);
+        i.feed(0, t); // folded up three octaves: key 0, board 0
+        assert_eq!(board(&i), Some(0));
+        i.feed(0x90, t);
+        assert_eq!(board(&i), None, "a status byte abandons it");
+        i.feed(0x9F, t);
+        i.feed(60, t);
+        assert_eq!(board(&i), None, "channel 16 is not played");
+        i.feed(0xA0, t);
+        i.feed(60, t);
+        assert_eq!(board(&i), None, "poly pressure writes no board");
+        i.feed(0xF0, t);
+        i.feed(60, t);
+        assert_eq!(board(&i), None, "SysEx data");
     }
 
     #[test]

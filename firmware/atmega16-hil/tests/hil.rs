@@ -79,6 +79,81 @@ fn thesis_table_4_running_status_and_note_off() {
     assert_eq!(hil.outputs(), [0, (1 << 8) | (1 << 15), 0, 0]);
 }
 
+/// A note message's board is addressed while its last byte is on the wire (START, address,
+/// output register, then the bus held). A Note-Off for a note that is not on writes nothing:
+/// that transaction ends after the register byte, which changes no register, and the next
+/// write goes out as usual.
+#[test]
+fn a_note_off_for_no_note_addresses_its_board_ahead_and_writes_nothing() {
+    let stream = [0x80, 60, 0, 0x90, 60, 100];
+    let (hil, host) = check_against_host(&stream);
+    let bus = hil.bus.borrow();
+    let board_1: Vec<&[u8]> = bus
+        .log
+        .iter()
+        .filter(|t| t.board == 1)
+        .map(|t| &t.bytes[..])
+        .skip(2) // power-up: outputs, then configuration
+        .collect();
+    assert_eq!(
+        board_1,
+        [&[0x02u8][..], &[0x02, 0x00, 0x01][..]],
+        "the register byte alone, then the Note-On's write (key 24: board 1, bit 8)"
+    );
+    assert_eq!(bus.boards[1].outputs(), 1 << 8);
+    assert_eq!(host.outputs()[1], 1 << 8);
+    // Each began before the last byte of its message had arrived.
+    let arrivals = hil.arrivals_us();
+    let ahead: Vec<&Transaction> = bus.log.iter().filter(|t| t.board == 1).skip(2).collect();
+    for (t, last) in ahead.iter().zip([arrivals[2], arrivals[5]]) {
+        assert!(
+            t.start_cycle < last * (F_CPU / 1_000_000),
+            "the write began at cycle {} after its message's last byte ({last} µs)",
+            t.start_cycle
+        );
+    }
+}
+
+/// A line that stops inside a note message (its last byte late, or never) does not keep the
+/// bus: the transaction addressed ahead ends after the register byte once the bus has been
+/// held for the step timeout (1 ms), and the message, when its byte does come, writes as
+/// usual.
+#[test]
+fn a_line_that_stops_inside_a_note_message_lets_the_bus_go() {
+    let mut hil = Hil::new();
+    hil.boot();
+    let from = hil.bus.borrow().log.len();
+    hil.send(&[0x90, 60]);
+    let note_at = *hil.arrivals_us().last().unwrap();
+    hil.run_us(3_000);
+    {
+        let bus = hil.bus.borrow();
+        let ended: Vec<&Transaction> = bus.log[from..].iter().collect();
+        assert_eq!(ended.len(), 1, "one transaction: {ended:?}");
+        assert_eq!((ended[0].board, &ended[0].bytes[..]), (1, &[0x02u8][..]));
+        let held_us = ended[0].stop_cycle / (F_CPU / 1_000_000) - note_at;
+        assert!(
+            (1_000..2_500).contains(&held_us),
+            "the bus was let go {held_us} µs after the note byte"
+        );
+    }
+    // Thru kept working, and the velocity, late, completes the message.
+    hil.send(&[100]);
+    hil.run_us(3_000);
+    let bus = hil.bus.borrow();
+    assert_eq!(bus.outputs(), [0, 1 << 8, 0, 0]);
+    assert_eq!(
+        bus.log[from + 1..]
+            .iter()
+            .map(|t| &t.bytes[..])
+            .collect::<Vec<_>>(),
+        [&[0x02u8, 0x00, 0x01][..]]
+    );
+    drop(bus);
+    hil.drain_thru();
+    assert_eq!(hil.thru, [0x90, 60, 100]);
+}
+
 #[test]
 fn running_status_with_velocity_zero_note_offs() {
     let mut s = vec![0x90];
@@ -419,7 +494,9 @@ fn figures() {
     let mut interp = Vec::new();
     let mut twi_cycles = Vec::new();
     let mut latency = Vec::new();
-    let mut overhead = Vec::new();
+    let mut real_latency = Vec::new();
+    let mut ahead_bits = Vec::new();
+    let mut began_ahead = Vec::new();
     let msgs: [&[u8]; 6] = [
         &[0x90, 60, 100],
         &[0x90, 64, 100],
@@ -460,12 +537,23 @@ fn figures() {
         let bus = hil.bus.borrow();
         let t = bus.log[log_from..]
             .iter()
-            .find(|t| t.bytes[0] == 2)
+            .find(|t| t.bytes.len() == 3 && t.bytes[0] == 2)
             .expect("the message made a board write");
-        latency.push((t.stop_cycle - rx_done) as f64 / 8.0);
-        // simavr's TWI takes 9 bit times for each data byte and none for START and the
-        // address: what is left is the firmware's (interpreting, and its interrupts).
-        overhead.push((t.stop_cycle - rx_done) as f64 / 8.0 - 27.0 * bit_cycles / 8.0);
+        let sim = (t.stop_cycle - rx_done) as f64 / 8.0;
+        // simavr's TWI takes 9 bit times for each byte after the address and none for START,
+        // the address and STOP: a real bus takes 11 bit times more for a write. The firmware
+        // addresses the board ahead (START, address, register byte) and holds the bus until
+        // the outputs come: that wait is when a real bus sends START and the address, up to
+        // their 10 bit times, already on the wire before the outputs are known. STOP follows
+        // the data either way.
+        let held = (t.stop_cycle - t.start_cycle) as f64 - 27.0 * bit_cycles - twi as f64;
+        let hidden = (held / bit_cycles).clamp(0.0, 10.0);
+        latency.push(sim);
+        real_latency.push(sim + (11.0 - hidden) * bit_cycles / 8.0);
+        ahead_bits.push(hidden);
+        // The register byte, its address and START before the last stop bit: the write began
+        // while that byte was on the wire.
+        began_ahead.push(t.start_cycle < rx_done);
     }
     hil.drain_thru();
 
@@ -483,7 +571,8 @@ fn figures() {
             .fold((f64::MAX, 0f64), |(a, b), &x| (a.min(x), b.max(x)))
     };
     let (lmin, lmax) = span(&latency);
-    let (omin, omax) = span(&overhead);
+    let (rmin, rmax) = span(&real_latency);
+    let (hmin, hmax) = span(&ahead_bits);
     // On a real bus the write is START + 4 bytes × 9 bits + STOP: about 38 bit times.
     let real_write = 38.0 * bit_cycles / 8.0;
     println!("\n== ATmega16 firmware figures (simavr, 8 MHz) ==");
@@ -516,19 +605,28 @@ fn figures() {
         avg(&twi_cycles) / 8.0
     );
     println!(
-        "last MIDI stop bit -> TWI STOP of the write: {lmin:.0}..{lmax:.0} µs in simavr at {:.2} kHz; of which not bus time: {omin:.0}..{omax:.0} µs",
+        "last MIDI stop bit -> TWI STOP of the write: {lmin:.0}..{lmax:.0} µs in simavr at {:.2} kHz (the board addressed ahead: START, address and register byte while the last byte is on the wire, the bus then held for {hmin:.1}..{hmax:.1} bit times)",
         twi_hz() as f64 / 1000.0
     );
     println!(
-        "  on a real bus (the write = 38 bit times = {real_write:.0} µs): {:.0}..{:.0} µs = {:.2}..{:.2} × the write; the thesis: 775..3420 µs at 83.33 kHz",
-        omin + real_write,
-        omax + real_write,
-        (omin + real_write) / real_write,
-        (omax + real_write) / real_write
+        "  on a real bus (the write = 38 bit times = {real_write:.0} µs): {rmin:.0}..{rmax:.0} µs = {:.2}..{:.2} × the write; the thesis: 775..3420 µs at 83.33 kHz",
+        rmin / real_write,
+        rmax / real_write
     );
-    for (m, l) in msgs.iter().zip(&latency) {
-        println!("  {m:02x?}: {l:.0} µs");
+    for ((m, l), r) in msgs.iter().zip(&latency).zip(&real_latency) {
+        println!("  {m:02x?}: {l:.0} µs in simavr, ≈ {r:.0} µs on a real bus");
     }
+    assert!(
+        began_ahead.iter().all(|&b| b),
+        "every write began while its message's last byte was on the wire: {began_ahead:?}"
+    );
+    // Issue 11's budget, at the thesis's bus clock: at most 1.2 × the write's own bus time.
+    // (A faster clock shortens the write, not the firmware's work after the last byte: at
+    // 222 222 Hz the same work is 1.2–1.4 × a 171 µs write, printed above.)
+    assert!(
+        twi_hz() != 83_333 || rmax <= 1.2 * real_write,
+        "last stop bit to the write done: up to {rmax:.0} µs, over 1.2 × the write's {real_write:.0} µs"
+    );
     assert!(data + bss + (stack as u64) < 1024);
     assert!(flash_text + data < 16384);
 }
@@ -547,8 +645,12 @@ fn scl_period_cycles(hz: u64) -> u64 {
 fn the_bus_runs_at_the_chosen_twi_hz() {
     let mut hil = Hil::new();
     hil.boot();
-    let from = hil.bus.borrow().log.len();
+    // A write that is not addressed ahead (see `a_note_off_for_no_note_addresses_its_board_
+    // ahead_and_writes_nothing`): the release by a System Reset, a one-byte message.
     hil.send(&[0x90, 60, 100]);
+    hil.run_us(5_000);
+    let from = hil.bus.borrow().log.len();
+    hil.send(&[0xFF]);
     // The cycles the TWI interrupt's probe is up, by the cycle they end.
     let mut in_handler = Vec::new();
     let end = hil.cycles.get() + 5_000 * 8;
@@ -561,8 +663,9 @@ fn the_bus_runs_at_the_chosen_twi_hz() {
     let bus = hil.bus.borrow();
     let t = bus.log[from..]
         .iter()
-        .find(|t| t.bytes[0] == 2)
-        .expect("the note made a board write");
+        .find(|t| t.bytes.len() == 3 && t.bytes[0] == 2)
+        .expect("the reset made a board write");
+    assert_eq!(t.bytes, [2, 0, 0], "the reset released the key");
     let handler: u64 = in_handler
         .iter()
         .filter(|&&(c, _)| (t.start_cycle..=t.stop_cycle).contains(&c))

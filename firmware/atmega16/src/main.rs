@@ -138,6 +138,9 @@ fn main() -> ! {
                 flush(robot);
                 deadline = next_deadline(robot);
             }
+            // A note message waiting for its last byte: its board addressed on the bus while
+            // that byte is on the wire (or the transaction ended, if it wrote nothing).
+            twi::ahead(robot.board_ahead().map(|b| b.index));
             probe::work(false);
             continue;
         }

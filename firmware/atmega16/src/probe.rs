@@ -71,7 +71,7 @@ pub fn stack_high_water() -> u16 {
 
 /// Publishes the deepest stack on PORTA.
 pub fn publish() {
-    let units = (stack_high_water() + 1) / 2;
+    let units = stack_high_water().div_ceil(2);
     unsafe { write_volatile(PORTA, units.min(255) as u8) };
 }
 

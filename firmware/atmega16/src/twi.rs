@@ -10,6 +10,14 @@
 //! - No step may take longer than [`STEP_TIMEOUT_US`] (the thesis waited for ever): the main
 //!   loop calls [`check`], which frees a stuck bus (TWI off, SCL clocked by hand until SDA is
 //!   free, a STOP, TWI on) and counts a failed attempt.
+//! - Addressing ahead ([`ahead`]): while the last byte of a note message is still on the MIDI
+//!   wire, the bus is idle and the note's board is known, the START, the board's address and
+//!   the output register go out and the bus is held (SCL low) until the outputs come
+//!   ([`push`]); if the message turns out to change nothing on that board (the guard dropped
+//!   the note, a Note-Off ended no note), or anything else needs the bus first, the
+//!   transaction ends there with a STOP: a write of the register byte alone, which changes no
+//!   register. So of a write's 38 bit times only the two data bytes and the STOP come after
+//!   the last MIDI byte.
 
 use avr_device::atmega16::{PORTC, TWI};
 use core::ptr::{addr_of, addr_of_mut, read_volatile, write_volatile};
@@ -122,6 +130,14 @@ static mut RECOVERIES: u16 = 0;
 pub const OUTPUTS: u8 = 0;
 /// A queued write to the configuration registers (`[0x06, lo, hi]`).
 pub const CONFIGURATION: u8 = 1 << 2;
+/// A write addressed ahead whose outputs are not known yet: the handler holds the bus after
+/// the register byte until [`push`] brings them.
+const WAITING: u8 = 1 << 3;
+/// A write addressed ahead that will bring no outputs: the handler ends it after the
+/// register byte, with a STOP.
+const ABORT: u8 = 1 << 4;
+/// `STEP` while the bus is held after the register byte of a [`WAITING`] write.
+const STEP_HELD: u8 = 0xFE;
 
 /// The bus's 7-bit addresses, by board index (the thesis's 0x42..0x48 in write form).
 pub const ADDRESSES: [u8; 4] = [0x21, 0x22, 0x23, 0x24];
@@ -181,8 +197,37 @@ pub fn idle() -> bool {
 }
 
 /// Queues `[register, lo, hi]` for `board` (`kind` is [`OUTPUTS`] or [`CONFIGURATION`]) and
-/// starts the bus if it is idle. Waits only if the queue is full (16 writes behind).
+/// starts the bus if it is idle. Waits only if the queue is full (16 writes behind). The
+/// outputs of the board addressed ahead go into its transaction (on at once if the bus is held
+/// for them); any other write first ends that transaction.
 pub fn push(board: u8, kind: u8, value: u16) {
+    let filled = avr_device::interrupt::free(|_| unsafe {
+        let Some(tail) = waiting() else {
+            return false;
+        };
+        if kind != OUTPUTS || Q_JOB[tail] & 3 != board {
+            abort();
+            return false;
+        }
+        Q_VALUE[tail] = value;
+        Q_JOB[tail] &= !WAITING;
+        if STEP == STEP_HELD {
+            // The register byte is out and the bus waits: the low byte now.
+            twi().twdr.write(|w| w.bits(value as u8));
+            STEP = 4;
+            STEP_AT = clock::ticks16_raw();
+            control(TWINT | TWEN | TWIE);
+        }
+        true
+    });
+    if filled {
+        return;
+    }
+    enqueue(board | kind, value);
+}
+
+/// Puts a write at the queue's head and starts the bus if it is idle.
+fn enqueue(job: u8, value: u16) {
     unsafe {
         let head = read_volatile(addr_of!(Q_HEAD));
         let next = (head + 1) % Q;
@@ -190,7 +235,7 @@ pub fn push(board: u8, kind: u8, value: u16) {
             avr_device::asm::wdr();
             check();
         }
-        write_volatile(addr_of_mut!(Q_JOB[head as usize]), board | kind);
+        write_volatile(addr_of_mut!(Q_JOB[head as usize]), job);
         write_volatile(addr_of_mut!(Q_VALUE[head as usize]), value);
         write_volatile(addr_of_mut!(Q_HEAD), next);
         if read_volatile(addr_of!(STEP)) == 0 {
@@ -200,13 +245,77 @@ pub fn push(board: u8, kind: u8, value: u16) {
     }
 }
 
+/// The write addressed ahead that still waits for its outputs: its queue index. It can only
+/// be the write on the bus (it is queued when the bus is idle, and anything queued after it
+/// ends it first).
+#[inline(always)]
+unsafe fn waiting() -> Option<usize> {
+    let tail = (Q_TAIL & (Q - 1)) as usize;
+    (Q_TAIL != read_volatile(addr_of!(Q_HEAD)) && Q_JOB[tail] & WAITING != 0).then_some(tail)
+}
+
+/// Addresses `board` ahead (the board the note message now waiting for its last byte would
+/// write, or `None`): called by the main loop after every byte. Starts a transaction for it
+/// when the bus is idle and it is not set aside; ends one waiting for another board, or for
+/// none any more (the message is complete, and wrote nothing there, or was abandoned).
+pub fn ahead(board: Option<u8>) {
+    avr_device::interrupt::free(|_| unsafe {
+        match (waiting(), board) {
+            (Some(tail), Some(b)) if Q_JOB[tail] & 3 == b => {}
+            (Some(_), _) => abort(),
+            (None, Some(b)) if idle() && FAILED & (1 << b) == 0 => {
+                let head = Q_HEAD;
+                Q_JOB[(head & (Q - 1)) as usize] = b | OUTPUTS | WAITING;
+                Q_HEAD = (head + 1) % Q;
+                begin();
+            }
+            _ => {}
+        }
+    });
+}
+
+/// Ends the transaction addressed ahead without data: at once with a STOP if the bus is held
+/// for it (the next write's START right after), else the handler ends it after the register
+/// byte. Interrupts off.
+unsafe fn abort() {
+    let tail = (Q_TAIL & (Q - 1)) as usize;
+    Q_JOB[tail] = (Q_JOB[tail] & !WAITING) | ABORT;
+    if STEP == STEP_HELD {
+        done(twi());
+    }
+}
+
+/// The write at `Q_TAIL` is done (or ended without data): a STOP, and the next write's START
+/// right after it, unless its board is set aside or it was ended ahead (then the main loop's
+/// [`begin`] skips it). Handler, or main loop with interrupts off.
+#[inline(always)]
+unsafe fn done(t: &avr_device::atmega16::twi::RegisterBlock) {
+    let next = (Q_TAIL + 1) % Q;
+    Q_TAIL = next;
+    TRIES = 0;
+    let job = Q_JOB[(next & (Q - 1)) as usize];
+    if next != read_volatile(addr_of!(Q_HEAD)) && FAILED & (1 << (job & 3)) == 0 && job & ABORT == 0
+    {
+        STEP = 1;
+        STEP_AT = clock::ticks16_raw();
+        t.twcr
+            .write(|w| w.bits(TWINT | TWSTO | TWSTA | TWEN | TWIE));
+    } else {
+        STEP = 0;
+        t.twcr.write(|w| w.bits(TWINT | TWSTO | TWEN));
+    }
+}
+
 /// Starts the next queued write of a board that is not set aside, or stays idle. Called by
 /// the main loop with interrupts off, while the handler is idle (or reported an error).
 fn begin() {
     unsafe {
         let head = read_volatile(addr_of!(Q_HEAD));
         let mut tail = Q_TAIL;
-        while tail != head && FAILED & (1 << (Q_JOB[tail as usize] & 3)) != 0 {
+        while tail != head
+            && (FAILED & (1 << (Q_JOB[tail as usize] & 3)) != 0
+                || Q_JOB[tail as usize] & ABORT != 0)
+        {
             tail = (tail + 1) % Q;
         }
         Q_TAIL = tail;
@@ -237,6 +346,12 @@ fn restart() {
 fn fail() {
     unsafe {
         TRIES += 1;
+        if Q_JOB[(Q_TAIL & (Q - 1)) as usize] & ABORT != 0 {
+            // A write addressed ahead that was ended meanwhile: nothing to try again
+            // (`begin` skips it).
+            begin();
+            return;
+        }
         if TRIES < ATTEMPTS {
             restart();
             return;
@@ -278,6 +393,18 @@ fn TWI() {
                 })
             });
             STEP = STEP_FAILED;
+        } else if step == 3 && Q_JOB[tail] & (WAITING | ABORT) != 0 {
+            // The register byte is out for a write addressed ahead.
+            if Q_JOB[tail] & ABORT != 0 {
+                // Nothing to write after all: a STOP.
+                done(t);
+            } else {
+                // Its outputs are not known yet: hold the bus (TWINT stays set, SCL low) and
+                // the interrupt off until `push` brings them.
+                STEP = STEP_HELD;
+                STEP_AT = clock::ticks16_raw();
+                t.twcr.write(|w| w.bits(TWEN));
+            }
         } else if step < 5 {
             let job = Q_JOB[tail];
             let byte = match step {
@@ -297,22 +424,8 @@ fn TWI() {
             STEP_AT = clock::ticks16_raw();
             t.twcr.write(|w| w.bits(TWINT | TWEN | TWIE));
         } else {
-            // Done. The next write's START right after the STOP, unless its board is set
-            // aside (then the main loop skips it).
-            let next = (Q_TAIL + 1) % Q;
-            Q_TAIL = next;
-            TRIES = 0;
-            if next != read_volatile(addr_of!(Q_HEAD))
-                && FAILED & (1 << (Q_JOB[(next & (Q - 1)) as usize] & 3)) == 0
-            {
-                STEP = 1;
-                STEP_AT = clock::ticks16_raw();
-                t.twcr
-                    .write(|w| w.bits(TWINT | TWSTO | TWSTA | TWEN | TWIE));
-            } else {
-                STEP = 0;
-                t.twcr.write(|w| w.bits(TWINT | TWSTO | TWEN));
-            }
+            // Done, and straight on to the next write.
+            done(t);
         }
     }
     crate::probe::twi_exit();
@@ -331,6 +444,10 @@ pub fn check() {
         match STEP {
             0 => begin(),
             STEP_FAILED => fail(),
+            // Held for outputs that did not come in time (the line stopped inside the message):
+            // end it without data.
+            STEP_HELD if clock::ticks16_raw().wrapping_sub(STEP_AT) > STEP_TIMEOUT_US => abort(),
+            STEP_HELD => {}
             _ if clock::ticks16_raw().wrapping_sub(STEP_AT) > STEP_TIMEOUT_US => {
                 recover();
                 fail();
