@@ -167,12 +167,13 @@ impl<const K: usize> Fingers<K> {
         self.velocity[key as usize] = velocity;
     }
 
-    /// Clamps every stamp older than [`AGE_CAP`], so that no age can wrap. With `all`, every
-    /// stamp is taken as at least that old (the clock jumped by more than the cap).
-    pub fn clamp_ages(&mut self, now: Instant, all: bool) {
-        let floor = now.low32().wrapping_sub(AGE_CAP);
+    /// Clamps every stamp older than [`AGE_CAP`] at `now` (the low 32 bits of the clock), so
+    /// that no age can wrap. With `all`, every stamp is taken as at least that old (the clock
+    /// jumped by more than the cap).
+    pub fn clamp_ages(&mut self, now: u32, all: bool) {
+        let floor = now.wrapping_sub(AGE_CAP);
         for stamp in self.stamp.iter_mut() {
-            if all || now.low32().wrapping_sub(*stamp) >= AGE_CAP {
+            if all || now.wrapping_sub(*stamp) >= AGE_CAP {
                 *stamp = floor;
             }
         }

@@ -79,15 +79,16 @@ impl Kept {
         self.set && now.wrapping_sub(self.at) as i32 >= 0
     }
 
-    /// After the clock jumped from `before` by `jump` µs (a cold path: a jump past a multiple
-    /// of 2³⁰ µs): a deadline the jump reached or passed is kept as passed at `now`, so that it
-    /// stays within reach of the clock whatever the jump (its exact instant no longer
-    /// matters: the next call runs what falls due, at `now`).
+    /// After the clock jumped from `before` by `jump` µs (`before` and `now` their low 32
+    /// bits; `jump` saturated at `u32::MAX`; a cold path, a jump past a multiple of 2³⁰ µs): a
+    /// deadline the jump reached or passed is kept as passed at `now`, so that it stays within
+    /// reach of the clock whatever the jump (its exact instant no longer matters: the next
+    /// call runs what falls due, at `now`).
     #[inline(always)]
-    fn reach(self, before: Instant, jump: u64, now: Instant) -> Self {
-        let ahead = self.at.wrapping_sub(before.low32()) as i32;
-        if self.set && (ahead <= 0 || jump >= ahead as u64) {
-            Self::at(now.low32())
+    fn reach(self, before: u32, jump: u32, now: u32) -> Self {
+        let ahead = self.at.wrapping_sub(before) as i32;
+        if self.set && (ahead <= 0 || jump >= ahead as u32) {
+            Self::at(now)
         } else {
             self
         }
@@ -630,15 +631,18 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         // jump of up to a cap on top of that would wrap 32 bits: clamp at the time before the
         // jump first.
         let jump = now.saturating_since(before);
-        if jump >= AGE_CAP as u64 {
+        let far = jump >= AGE_CAP as u64;
+        // In 32 bits from here: a jump of at least the cap reaches everything.
+        let jump = if far { u32::MAX } else { jump as u32 };
+        let (before, now) = (before.low32(), now.low32());
+        if far {
             self.fingers.clamp_ages(now, true);
-            self.last_input = now.low32().wrapping_sub(AGE_CAP);
+            self.last_input = now.wrapping_sub(AGE_CAP);
         } else {
-            self.fingers.clamp_ages(before, false);
-            self.fingers.clamp_ages(now, false);
             for at in [before, now] {
-                if at.low32().wrapping_sub(self.last_input) >= AGE_CAP {
-                    self.last_input = at.low32().wrapping_sub(AGE_CAP);
+                self.fingers.clamp_ages(at, false);
+                if at.wrapping_sub(self.last_input) >= AGE_CAP {
+                    self.last_input = at.wrapping_sub(AGE_CAP);
                 }
             }
         }

@@ -58,7 +58,20 @@ impl KeyRange {
     ///
     /// Folding needs a range of at least an octave (12 keys) to land every note; with a
     /// narrower range a note whose pitch class has no key is dropped.
+    #[inline]
     pub const fn key_for(self, note: Note, policy: OutOfRange) -> Option<KeyOf> {
+        // Most notes are in range: one subtraction and compare (an 8-bit MCU does this on
+        // every note message); folding, out of line.
+        let key = note.get().wrapping_sub(self.low);
+        if key <= self.high - self.low {
+            return Some(KeyOf { key, octaves: 0 });
+        }
+        self.fold(note, policy)
+    }
+
+    /// [`key_for`](Self::key_for) for a note outside the range.
+    #[inline(never)]
+    const fn fold(self, note: Note, policy: OutOfRange) -> Option<KeyOf> {
         let mut n = note.get() as i16;
         let mut octaves: i8 = 0;
         if let OutOfRange::Drop = policy {

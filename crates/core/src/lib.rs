@@ -47,15 +47,21 @@
 //! | the 61 keys' heat for the duty limit (feature `duty-limit`, off on the ATmega16) | 122 (+6 padding) |
 //! | held notes, [`NotePool<32>`](NotePool) (for MCUs: 32 notes played or sustained at once, twice the power budget) | 97 |
 //! | held notes, [`NoteTable`] (the default: every channel of every note, played and sustained, exact under any load) | 512 |
-//! | frame 16, decoder 28, clock, last input, kept deadlines and pedals 35 | ≈ 84 |
+//! | frame 16, decoder 12 (28 with `stats`: its counters), clock 8, last input 4 and kept deadlines 10 (32-bit, see below), pedals and flags | ≈ 60 |
 //! | the configuration (none with a constant one: [`Thesis`]) | 68 |
-//! | the statistics (feature `stats`, off on the ATmega16) | 64 |
-//! | `Interpreter<4, 61, NotePool<32>>` without `duty-limit` and `stats` | 632 |
-//! | **`Interpreter<4, 61, NotePool<32>, Thesis>` without `duty-limit` and `stats`: the ATmega16 build** | **568** |
+//! | the statistics and the decoder's counters (feature `stats`, off on the ATmega16) | 80 (+8 padding) |
+//! | `Interpreter<4, 61, NotePool<32>>` without `duty-limit` and `stats` | 616 |
+//! | **`Interpreter<4, 61, NotePool<32>, Thesis>` without `duty-limit` and `stats`: the ATmega16 build** | **544** |
 //! | **[`Interpreter`] with [`NoteTable`], the duty limit and the statistics: the host's** | **1232** |
 //!
-//! AVR has no padding, so the ATmega16 figure is a few bytes lower (560). The [`Decoder`]
-//! alone takes 28 bytes.
+//! AVR has no padding, so the ATmega16 figure is a few bytes lower (534). The [`Decoder`]
+//! alone takes 12 bytes (28 with `stats`).
+//!
+//! Time is passed in as 64-bit [`Instant`]s, but the interpreter keeps its deadlines and the
+//! time of the last input in 32 bits (the low bits of the clock, compared by wrapping
+//! difference; exact while they lie within 2³¹ µs of the clock, which a jump of the clock past
+//! that preserves by marking them passed): on an 8-bit MCU every byte's work on time is then
+//! 32-bit.
 //!
 //! ## Cargo features
 //!
@@ -65,9 +71,10 @@
 //!   key. The ATmega16 firmware builds without it (its 1 KB of SRAM has no room); its hold
 //!   limit and watchdog still apply.
 //! - `stats` (default): [`Interpreter::stats`] counts what became of the notes ([`Stats`],
-//!   64 bytes of RAM and the code that counts). Without it every count reads 0; the
-//!   [`NoteEvent`]s, which carry the same account note by note, are unchanged. The ATmega16
-//!   firmware builds without it.
+//!   64 bytes of RAM and the code that counts), and the [`Decoder`] counts bytes, messages,
+//!   dropped and abandoned ones ([`Counters`], 16 bytes and four 32-bit increments a byte).
+//!   Without it every count reads 0; the messages and the [`NoteEvent`]s, which carry the
+//!   same account note by note, are unchanged. The ATmega16 firmware builds without it.
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
