@@ -2,7 +2,8 @@
 # Builds the ATmega16 firmware and runs its hardware-in-the-loop tests in simavr, and builds
 # the Raspberry Pi Pico firmware (firmware/rp2040) for thumbv6m-none-eabi and runs its tests in
 # the rp2040js emulator (firmware/rp2040-emu: node's test runner, orch-core on the host through
-# firmware/rp2040-emu/expect).
+# firmware/rp2040-emu/expect), booted from the UF2 that elf2uf2-rs makes of it (what a Pico is
+# flashed with).
 #
 # From a fresh machine: installs what is missing (Debian packages, the nightly's rust-src),
 # builds the firmware ELF at
@@ -37,9 +38,21 @@ echo "== $pico"
 size_tool="$(command -v llvm-size || command -v arm-none-eabi-size || true)"
 [ -z "$size_tool" ] || "$size_tool" "$pico"
 
-echo "== the Pico firmware in an RP2040 emulator (rp2040js, firmware/rp2040-emu)"
+echo "== the Pico's UF2, what a Pico is flashed with (elf2uf2-rs, as the README says)"
+# Without its default `serial` feature (a serial monitor after deploying, which needs libudev).
+cargo_bin="${CARGO_HOME:-$HOME/.cargo}/bin"
+e2u="$(command -v elf2uf2-rs || true)"
+if [ -z "$e2u" ]; then
+    [ -x "$cargo_bin/elf2uf2-rs" ] ||
+        cargo install elf2uf2-rs --locked --no-default-features --version 2.2.0
+    e2u="$cargo_bin/elf2uf2-rs"
+fi
+"$e2u" "$pico" "$pico.uf2"
+ls -l "$pico.uf2"
+
+echo "== the Pico firmware in an RP2040 emulator (rp2040js, firmware/rp2040-emu), booted from the UF2"
 (cd "$here/rp2040-emu/expect" && cargo build --release --locked)
-(cd "$here/rp2040-emu" && ORCH_RP2040_ELF="$pico" timeout 600 node --test test/*.test.js)
+(cd "$here/rp2040-emu" && ORCH_RP2040_ELF="$pico" ORCH_RP2040_UF2="$pico.uf2" timeout 600 node --test test/*.test.js)
 
 echo "== the orch command, for the thesis's whole chain (tests/chain.rs: orch play -> pty -> simavr)"
 (cd "$here/.." && cargo build --locked -p orch)
