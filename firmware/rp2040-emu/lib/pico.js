@@ -64,6 +64,8 @@ class Pico {
     this.usbHost.onPacketIn = (bytes, ns) => this.usbIn.push({ bytes: Array.from(bytes), ns });
     /** Watchdog resets, with their times (ns). */
     this.resets = [];
+    /** The status LED (GP25) driven high or low: { on, ns }, in order (power-up is off). */
+    this.led = [];
     /** Instructions and cycles executed (all chips), and the cycles spent asleep. */
     this.cycles = 0;
     this.lineFreeNs = 0;
@@ -72,6 +74,8 @@ class Pico {
 
   /** Powers the chip up (or resets it) at `ns`. */
   boot(ns) {
+    // A reset lets go of the LED's pin.
+    if (this.led.length && this.led[this.led.length - 1].on) this.led.push({ on: false, ns });
     const chip = new RP2040(); // with a SimulationClock of its own, set to `ns`
     const clock = chip.clock;
     clock.nanosCounter = ns;
@@ -103,6 +107,9 @@ class Pico {
       throw new Error(`UDF/BKPT #${code} at PC 0x${pc.toString(16)}`);
     };
     const watchdog = chip.peripherals[0x40058];
+    // After a watchdog reset the new chip's REASON register says so (the datasheet: TIMER,
+    // bit 0; the watchdog block keeps it across the reset it made).
+    if (this.resetDue) watchdog.reason = 1;
     watchdog.onWatchdogTrigger = () => {
       // The chip resets: stop its watchdog (rp2040js's periodic alarm would fire again at
       // once, forever), and build the chip anew before the next instruction.
@@ -110,6 +117,12 @@ class Pico {
       watchdog.alarm.enable = false;
       this.resetDue = true;
     };
+    // The status LED: only its driven levels (an input pin is off).
+    chip.gpio[25].addListener((state) => {
+      const on = state === 1; // GPIOPinState.High
+      const last = this.led.length ? this.led[this.led.length - 1].on : false;
+      if (on !== last) this.led.push({ on, ns: clock.nanos });
+    });
     pl011(chip.uart[0]);
     chip.uart[0].onByte = (b) => this.thru.push(b);
     dwI2c(chip.i2c[0]);

@@ -13,8 +13,12 @@
 //!   again every 10 ms with its frame.
 //! - The watchdog (0.5 s), fed by the interpreter loop: a hung loop resets the Pico, and
 //!   power-up releases every key.
+//! - The status LED (GP25): a flash for MIDI coming in, blinking for a fault ([`led`]).
+//! - The pin-out in one place: [`Pins`].
 #![no_std]
 #![no_main]
+
+mod led;
 
 use core::convert::Infallible;
 
@@ -22,13 +26,15 @@ use embassy_embedded_hal::shared_bus::asynch::i2c::I2cDevice;
 use embassy_executor::Spawner;
 use embassy_futures::select::{select, Either};
 use embassy_rp::bind_interrupts;
+use embassy_rp::gpio::{Level, Output};
 use embassy_rp::i2c::{self, I2c};
-use embassy_rp::peripherals::{I2C0, UART0, USB};
+use embassy_rp::peripherals::{I2C0, PIN_0, PIN_1, PIN_25, PIN_4, PIN_5, UART0, USB};
 use embassy_rp::uart::{
     self, BufferedInterruptHandler, BufferedUart, BufferedUartRx, BufferedUartTx,
 };
 use embassy_rp::usb::{self, Driver};
-use embassy_rp::watchdog::Watchdog;
+use embassy_rp::watchdog::{ResetReason, Watchdog};
+use embassy_rp::Peri;
 use embassy_sync::blocking_mutex::raw::{CriticalSectionRawMutex, NoopRawMutex};
 use embassy_sync::channel::Channel;
 use embassy_sync::mutex::Mutex;
@@ -39,6 +45,8 @@ use embedded_io_async::{Read, Write};
 use orch_boards::asynch::Pca9555Async;
 use orch_core::{BoardId, Decoder, FingerBoards, Instant, Interpreter};
 use static_cell::StaticCell;
+
+use crate::led::Led;
 
 bind_interrupts!(struct Irqs {
     UART0_IRQ => BufferedInterruptHandler<UART0>;
@@ -56,6 +64,20 @@ const ATTEMPTS: u8 = 3;
 const RETRY: Duration = Duration::from_millis(10);
 /// The watchdog's timeout.
 const WATCHDOG: Duration = Duration::from_millis(500);
+
+/// The pin-out, in one place (the README's table): every GPIO the firmware uses.
+struct Pins {
+    /// GP0, UART0 TX: MIDI thru out.
+    din_thru: Peri<'static, PIN_0>,
+    /// GP1, UART0 RX: DIN MIDI in (through the opto-isolator).
+    din_in: Peri<'static, PIN_1>,
+    /// GP4, I2C0 SDA: the finger boards.
+    sda: Peri<'static, PIN_4>,
+    /// GP5, I2C0 SCL.
+    scl: Peri<'static, PIN_5>,
+    /// GP25: the Pico's own LED, the status LED.
+    led: Peri<'static, PIN_25>,
+}
 
 /// MIDI in, in arrival order, with the µs clock at arrival.
 enum Input {
@@ -77,8 +99,17 @@ fn now_us() -> u64 {
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
     let p = embassy_rp::init(Default::default());
+    let pins = Pins {
+        din_thru: p.PIN_0,
+        din_in: p.PIN_1,
+        sda: p.PIN_4,
+        scl: p.PIN_5,
+        led: p.PIN_25,
+    };
     let mut watchdog = Watchdog::new(p.WATCHDOG);
+    let after_reset = watchdog.reset_reason() == Some(ResetReason::TimedOut);
     watchdog.start(WATCHDOG);
+    let led = Led::new(Output::new(pins.led, Level::Low), now_us(), after_reset);
 
     // DIN MIDI in and thru on UART0.
     static TX_BUF: StaticCell<[u8; 64]> = StaticCell::new();
@@ -87,8 +118,8 @@ async fn main(spawner: Spawner) {
     config.baudrate = 31_250;
     let din = BufferedUart::new(
         p.UART0,
-        p.PIN_0,
-        p.PIN_1,
+        pins.din_thru,
+        pins.din_in,
         Irqs,
         TX_BUF.init([0; 64]),
         RX_BUF.init([0; 64]),
@@ -133,15 +164,15 @@ async fn main(spawner: Spawner) {
     i2c_config.frequency = I2C_HZ;
     static BUS: StaticCell<Bus> = StaticCell::new();
     let bus = BUS.init(Mutex::new(I2c::new_async(
-        p.I2C0, p.PIN_5, p.PIN_4, Irqs, i2c_config,
+        p.I2C0, pins.scl, pins.sda, Irqs, i2c_config,
     )));
     let mut boards: [Board; 4] = ADDRESSES.map(|a| Pca9555Async::new(I2cDevice::new(bus), a));
 
-    interpret(&mut boards, &mut watchdog).await
+    interpret(&mut boards, &mut watchdog, led).await
 }
 
-/// The interpreter loop: MIDI in, the guard's timers, the boards, the watchdog.
-async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog) -> ! {
+/// The interpreter loop: MIDI in, the guard's timers, the boards, the watchdog, the LED.
+async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog, mut led: Led<'_>) -> ! {
     let mut robot = Interpreter::thesis();
     let mut usb_decoder: Decoder = Decoder::new();
     let mut failed: u8 = 0;
@@ -153,8 +184,12 @@ async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog) -> ! {
     let mut retry_at = Clock::now() + RETRY;
     loop {
         watchdog.feed(WATCHDOG);
-        // Wake for input, the guard's next deadline, a retry round, or the watchdog.
+        let led_changes = led.show(now_us(), failed != 0);
+        // Wake for input, the guard's next deadline, a retry round, the LED, or the watchdog.
         let mut wake = Clock::now() + WATCHDOG / 4;
+        if let Some(t) = led_changes {
+            wake = wake.min(Clock::from_micros(t));
+        }
         if let Some(d) = robot.next_deadline() {
             wake = wake.min(Clock::from_micros(d.as_micros()));
         }
@@ -165,9 +200,11 @@ async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog) -> ! {
             Either::First(Input::Din(byte, at)) => {
                 advance(&mut robot, at);
                 robot.feed(byte, Instant::from_micros(at));
+                led.activity(at);
             }
             Either::First(Input::Usb(bytes, len, at)) => {
                 advance(&mut robot, at);
+                led.activity(at);
                 for &b in &bytes[..len as usize] {
                     for message in usb_decoder.push(b) {
                         robot.handle(message, Instant::from_micros(at));
