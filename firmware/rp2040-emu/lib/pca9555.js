@@ -78,6 +78,25 @@ class Pca9555Bus {
     this.firstDrivenHighNs = null;
     /** Called with each finished write transaction. */
     this.onWrite = null;
+    /**
+     * Clock pulses a board holding SDA low (it lost its place in a byte) still needs before it
+     * lets go: 0 when SDA is free. See `holdSda`.
+     */
+    this.sdaHeldFor = 0;
+    /** Clock pulses made by hand on SCL (GP5 driven low by the firmware as a GPIO). */
+    this.handPulses = 0;
+    /** The pads of the chip attached last: { sda, scl }. */
+    this.pads = null;
+  }
+
+  /**
+   * A board holds SDA low, as one does that lost its place in a byte (the master reset in the
+   * middle of a read or a write): it lets go after `pulses` clock pulses. Meanwhile no START
+   * can be made (the controller loses arbitration).
+   */
+  holdSda(pulses) {
+    this.sdaHeldFor = pulses;
+    this.pads?.sda.setInputValue(pulses === 0);
   }
 
   outputs() {
@@ -87,6 +106,18 @@ class Pca9555Bus {
   /** Connects the bus to `i2c` (an RPI2C) of a chip running on `clock`. */
   attach(chip, i2c) {
     const clock = chip.clock;
+    // The bus lines as the pads read them (GP4 SDA, GP5 SCL): pulled up, SCL low while a
+    // board stretches the clock, SDA low while a board holds it. A pulse made by hand on SCL
+    // (the pin a GPIO output driven low, then let go) counts for a board holding SDA.
+    const pads = { sda: chip.gpio[4], scl: chip.gpio[5] };
+    this.pads = pads;
+    pads.sda.setInputValue(this.sdaHeldFor === 0);
+    pads.scl.setInputValue(true);
+    pads.scl.addListener((state) => {
+      if (state !== 0) return; // GPIOPinState.Low: driven low
+      this.handPulses++;
+      if (this.sdaHeldFor > 0 && --this.sdaHeldFor === 0) pads.sda.setInputValue(true);
+    });
     let current = null; // { board, bytes, startNs, first, read }
     let pending = null;
     const later = (bits, fn) => {
@@ -99,6 +130,11 @@ class Pca9555Bus {
       fn();
     });
     i2c.onStart = () => {
+      if (this.sdaHeldFor > 0) {
+        // SDA is low: the controller cannot make its START.
+        later(1, () => i2c.arbitrationLost());
+        return;
+      }
       current = { board: null, bytes: [], startNs: clock.nanos, first: true, read: false };
       later(1, () => i2c.completeStart());
     };
@@ -112,9 +148,13 @@ class Pca9555Bus {
       };
       later(9, () => {
         if (board && board.stretchUntilNs > clock.nanos) {
-          // SCL held low: the controller waits (a real one has no timeout either).
+          // SCL held low: the controller waits (it has no timeout of its own).
+          pads.scl.setInputValue(false);
           if (board.stretchUntilNs !== Infinity) {
-            later((board.stretchUntilNs - clock.nanos) / this.bitNs(chip, i2c), ack);
+            later((board.stretchUntilNs - clock.nanos) / this.bitNs(chip, i2c), () => {
+              pads.scl.setInputValue(true);
+              ack();
+            });
           }
           return;
         }

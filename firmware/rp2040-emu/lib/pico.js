@@ -171,6 +171,19 @@ class Pico {
   }
 
   /**
+   * The firmware hangs for `us` (a loop with interrupts off, a lock-up): the core runs no
+   * instruction while time and the peripherals go on. Ends early if the watchdog resets the
+   * chip meanwhile (the reset itself happens at the next run).
+   */
+  hangUs(us) {
+    const end = this.clock.nanos + us * 1000;
+    while (this.clock.nanos < end && !this.resetDue) {
+      const next = this.clock.nextAlarm ? Math.min(this.clock.nextAlarm.nanos, end) : end;
+      this.clock.tick(Math.max(next - this.clock.nanos, 0));
+    }
+  }
+
+  /**
    * Puts DIN bytes on the wire back to back from now (or after the bytes still on it), one
    * every `paceUs` (320 µs: 31250 baud, 10 bits); each reaches UART0's receiver at the end
    * of its stop bit. Returns when the last is in the FIFO.

@@ -81,9 +81,8 @@ test('the LED blinks while a board does not answer, and stops once it does', () 
 
 test('the LED shows a watchdog reset for 2 s', () => {
   const { p } = booted();
-  p.bus.boards[2].stretchUntilNs = p.nowNs + 700e6; // hangs the bus: the watchdog resets
-  p.sendDin([0x90, 76, 100]);
-  p.runUs(800_000);
+  p.hangUs(700_000); // the firmware hangs: the watchdog resets the Pico
+  p.runUs(100_000);
   assert.equal(p.resets.length, 1, 'one watchdog reset');
   const reset = p.resets[0];
   p.runUs(2_500_000);

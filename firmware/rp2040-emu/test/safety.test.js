@@ -1,9 +1,10 @@
 'use strict';
-// Power-up, a board that stops answering, a hung bus and the watchdog, a full-rate DIN line.
+// Power-up, a board that stops answering, a board holding SCL or SDA low, a hung firmware and the
+// watchdog, a full-rate DIN line.
 const test = require('node:test');
 const assert = require('node:assert/strict');
 const { Pico } = require('../lib/pico.js');
-const { booted, assertSameAsHost, floodStream, fmt, BYTE_US } = require('./common.js');
+const { booted, assertSameAsHost, floodStream, fmt, midiEvent, BYTE_US } = require('./common.js');
 const host = require('../lib/host.js');
 
 test('power-up drives no pin before the first note', () => {
@@ -54,40 +55,89 @@ test('a NACKing board is retried and released when it answers again', () => {
   assert.equal(p.resets.length, 0, 'no watchdog reset');
 });
 
-test('a hung bus trips the watchdog, and the keys come up released', () => {
+test('a hung firmware trips the watchdog, and the keys come up released', () => {
   const { p } = booted();
   p.sendDin([0x90, 36, 100, 0x90, 60, 100]); // board 0 bit 0, board 1 bit 8
   p.runUs(5_000);
   assert.deepEqual(p.outputs(), [1, 1 << 8, 0, 0]);
-  // Board 2 holds SCL low for 0.7 s after its address: the firmware's write to it (the
-  // RP2040's I2C has no timeout) and with it the interpreter loop hang.
   const hungAt = p.nowNs;
-  p.bus.boards[2].stretchUntilNs = hungAt + 700e6;
-  p.sendDin([0x90, 76, 100]); // board 2 bit 8
   const fromLog = p.bus.log.length;
-  p.runUs(690_000);
+  p.hangUs(700_000);
+  p.runUs(20_000);
   assert.equal(p.resets.length, 1, 'one watchdog reset');
   const resetMs = (p.resets[0] - hungAt) / 1e6;
   assert.ok(resetMs > 400 && resetMs < 600, `the reset came ${resetMs} ms after the hang (watchdog 0.5 s)`);
-  // After the reset the firmware initialised boards 0 and 1: outputs 0 first.
+  // After the reset the firmware initialised every board: outputs 0 first.
   const after = p.bus.log.slice(fromLog).filter((t) => t.stopNs > p.resets[0]);
-  for (const b of [0, 1]) {
+  for (const b of [0, 1, 2, 3]) {
     const first = after.find((t) => t.board === b);
     assert.deepEqual(first.bytes, [2, 0, 0], `board ${b}: outputs 0 first after the reset`);
     assert.ok(first.stopNs - p.resets[0] < 20e6, 'within 20 ms of the reset');
   }
-  assert.deepEqual(p.outputs().slice(0, 2), [0, 0], 'the keys that were down came up released');
-  // Board 2 lets go at 0.7 s: initialised too, and the firmware plays again.
-  p.runUs(100_000);
-  assert.deepEqual(p.outputs(), [0, 0, 0, 0]);
-  assert.equal(p.bus.boards[2].config(), 0);
+  assert.deepEqual(p.outputs(), [0, 0, 0, 0], 'the keys that were down came up released');
   p.thru.length = 0;
   p.sendDin([0x90, 84, 1]);
   p.runUs(5_000);
   assert.deepEqual(p.thru, [0x90, 84, 1]);
-  assert.equal(p.outputs()[3], 1);
+  assert.equal(p.outputs()[3], 1, 'it plays again');
+  p.runUs(1_000_000);
   assert.equal(p.resets.length, 1, 'no reset loop');
-  console.log(`  watchdog reset ${fmt(resetMs)} ms after the bus hung; boards 0 and 1 released ${fmt((after.find((t) => t.board === 1).stopNs - p.resets[0]) / 1000)} µs after it`);
+  console.log(`  watchdog reset ${fmt(resetMs)} ms after the firmware hung; boards 0 and 1 released ${fmt((after.find((t) => t.board === 1).stopNs - p.resets[0]) / 1000)} µs after it`);
+});
+
+test('a board holding SCL low is timed out: the loop goes on, and every board is initialised again once it lets go', () => {
+  const { p } = booted();
+  p.sendDin([0x90, 36, 100, 0x90, 60, 100]); // board 0 bit 0, board 1 bit 8
+  p.runUs(5_000);
+  assert.deepEqual(p.outputs(), [1, 1 << 8, 0, 0]);
+  // Board 2 holds SCL low for 0.7 s after its address: longer than the watchdog.
+  const hungAt = p.nowNs;
+  p.bus.boards[2].stretchUntilNs = hungAt + 700e6;
+  const fromLog = p.bus.log.length;
+  const ledFrom = p.led.length;
+  p.sendDin([0x90, 76, 100]); // board 2 bit 8: its write hangs the bus
+  p.runUs(100_000);
+  // Meanwhile: MIDI in by DIN and USB, interpreted (the boards cannot be written yet).
+  p.thru.length = 0;
+  p.sendDin([0x80, 36, 0]); // board 0 released
+  p.sendUsb(midiEvent([0x90, 48, 100])); // board 0 bit 12
+  p.runUs(500_000);
+  assert.deepEqual(p.thru, [0x80, 36, 0], 'thru goes on');
+  assert.equal(p.resets.length, 0, 'no watchdog reset: the loop went on');
+  assert.ok(p.led.length - ledFrom >= 4, 'the LED blinks: the boards are set aside');
+  assert.deepEqual(p.bus.log.slice(fromLog), [], 'nothing on the bus while it is held');
+  // Board 2 lets go at 0.7 s: the aborted write ends, every board is initialised again (outputs
+  // 0 first) and shows the interpreter's frame, the notes of the hang included.
+  p.runUs(200_000);
+  const after = p.bus.log.slice(fromLog);
+  for (const b of [0, 1, 2, 3]) {
+    const first = after.find((t) => t.board === b && t.bytes.length === 3);
+    assert.deepEqual(first.bytes, [2, 0, 0], `board ${b}: outputs 0 first`);
+    const backMs = (first.stopNs - (hungAt + 700e6)) / 1e6;
+    assert.ok(backMs > 0 && backMs < 15, `board ${b} initialised ${fmt(backMs)} ms after the bus was free`);
+  }
+  assert.deepEqual(p.outputs(), [1 << 12, 1 << 8, 1 << 8, 0]);
+  assert.equal(p.resets.length, 0);
+  console.log(`  a board held SCL low 700 ms: no reset, thru and the interpreter went on, every board back ${fmt((after[after.length - 1].stopNs - (hungAt + 700e6)) / 1e6)} ms after it let go`);
+});
+
+test('a board holding SDA low is cleared by clock pulses made by hand (bus clear)', () => {
+  const { p } = booted();
+  // A board lost its place in a byte and holds SDA until it has seen 3 more clock pulses.
+  p.bus.holdSda(3);
+  const t0 = p.nowNs;
+  p.sendDin([0x90, 60, 100]); // board 1 bit 8: no START can be made
+  p.runUs(50_000);
+  assert.equal(p.bus.sdaHeldFor, 0, 'SDA let go');
+  assert.equal(p.bus.handPulses, 3, 'three pulses by hand, no more than it took');
+  assert.deepEqual(p.outputs(), [0, 1 << 8, 0, 0], 'the note reached its board');
+  const written = p.bus.outputWrites().filter((w) => w.board === 1 && w.outputs === 1 << 8);
+  const ms = (written[0].tNs - t0) / 1e6;
+  assert.ok(ms < 30, `written ${fmt(ms)} ms after the note (a 10 ms retry round)`);
+  p.sendDin([0x80, 60, 0]);
+  p.runUs(5_000);
+  assert.deepEqual(p.outputs(), [0, 0, 0, 0], 'the bus works');
+  assert.equal(p.resets.length, 0);
 });
 
 test('a full-rate DIN line loses no press or release', () => {

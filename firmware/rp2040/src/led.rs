@@ -51,7 +51,7 @@ impl<'d> Led<'d> {
     /// when it next changes by itself (µs), if it will.
     pub fn show(&mut self, now: u64, fault: bool) -> Option<u64> {
         let (on, next) = if fault || now < self.fault_until {
-            let on = (now / BLINK_HALF_US) % 2 == 0;
+            let on = (now / BLINK_HALF_US).is_multiple_of(2);
             (on, Some((now / BLINK_HALF_US + 1) * BLINK_HALF_US))
         } else if now < self.flash_until {
             (true, Some(self.flash_until))

@@ -10,7 +10,8 @@
 //! - The four PCA9555 finger boards at 0x21..=0x24 on I2C0 (GP4 SDA, GP5 SCL) at 400 kHz,
 //!   with orch-boards' async driver: each board initialised outputs-0 FIRST, THEN outputs;
 //!   one write per changed board; 3 attempts, then the board is set aside and initialised
-//!   again every 10 ms with its frame.
+//!   again every 10 ms with its frame. Every bus operation has a time limit and a hung bus is
+//!   recovered ([`bus`]): a hung board no longer hangs the loop.
 //! - The watchdog (0.5 s), fed by the interpreter loop: a hung loop resets the Pico, and
 //!   power-up releases every key.
 //! - The status LED (GP25): a flash for MIDI coming in, blinking for a fault ([`led`]).
@@ -18,6 +19,7 @@
 #![no_std]
 #![no_main]
 
+mod bus;
 mod led;
 
 use core::convert::Infallible;
@@ -46,6 +48,7 @@ use orch_boards::asynch::Pca9555Async;
 use orch_core::{BoardId, Decoder, FingerBoards, Instant, Interpreter};
 use static_cell::StaticCell;
 
+use crate::bus::Fault;
 use crate::led::Led;
 
 bind_interrupts!(struct Irqs {
@@ -64,6 +67,8 @@ const ATTEMPTS: u8 = 3;
 const RETRY: Duration = Duration::from_millis(10);
 /// The watchdog's timeout.
 const WATCHDOG: Duration = Duration::from_millis(500);
+/// Every board.
+const ALL: u8 = 0b1111;
 
 /// The pin-out, in one place (the README's table): every GPIO the firmware uses.
 struct Pins {
@@ -177,8 +182,13 @@ async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog, mut led: Le
     let mut usb_decoder: Decoder = Decoder::new();
     let mut failed: u8 = 0;
     for (i, b) in boards.iter_mut().enumerate() {
-        if b.init().await.is_err() {
-            failed |= 1 << i;
+        match bus::within(b.init()).await {
+            Ok(()) => {}
+            Err(Fault::Failed) => failed |= 1 << i,
+            Err(Fault::TimedOut) => {
+                failed = ALL;
+                break;
+            }
         }
     }
     let mut retry_at = Clock::now() + RETRY;
@@ -215,14 +225,10 @@ async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog, mut led: Le
         }
         write(&mut robot, boards, &mut failed).await;
         if failed != 0 && Clock::now() >= retry_at {
-            for (i, b) in boards.iter_mut().enumerate() {
-                if failed & (1 << i) != 0 && b.init().await.is_ok() {
-                    failed &= !(1 << i);
-                    let outputs = robot.frame().outputs(i);
-                    if outputs != 0 && b.set_outputs(outputs).await.is_err() {
-                        failed |= 1 << i;
-                    }
-                }
+            // Boards set aside are initialised again, and sent their frame, once the bus is
+            // usable (a hung transfer ended, SDA cleared).
+            if bus::recover().await {
+                retry(&robot, boards, &mut failed).await;
             }
             retry_at = Clock::now() + RETRY;
         }
@@ -250,7 +256,8 @@ impl FingerBoards for Changed {
 }
 
 /// Writes every changed board, [`ATTEMPTS`] times at most; a board that fails is set aside
-/// in `failed` (the retry round initialises it again and sends its frame).
+/// in `failed` (the retry round initialises it again and sends its frame). A write that runs
+/// out of time has hung the bus: every board is set aside until the bus is recovered.
 async fn write(robot: &mut Interpreter, boards: &mut [Board; 4], failed: &mut u8) {
     let mut changed = Changed::default();
     let _ = robot.flush(&mut changed);
@@ -259,15 +266,43 @@ async fn write(robot: &mut Interpreter, boards: &mut [Board; 4], failed: &mut u8
         if *failed & (1 << i) != 0 {
             continue;
         }
-        let mut ok = false;
+        let mut result = Err(Fault::Failed);
         for _ in 0..ATTEMPTS {
-            if boards[i].set_outputs(outputs).await.is_ok() {
-                ok = true;
+            result = bus::within(boards[i].set_outputs(outputs)).await;
+            if result != Err(Fault::Failed) {
                 break;
             }
         }
-        if !ok {
-            *failed |= 1 << i;
+        match result {
+            Ok(()) => {}
+            Err(Fault::Failed) => *failed |= 1 << i,
+            Err(Fault::TimedOut) => {
+                *failed = ALL;
+                return;
+            }
+        }
+    }
+}
+
+/// The retry round: every board set aside is initialised again (outputs 0 first) and sent
+/// its frame; one that still fails stays aside, and a timeout sets them all aside again.
+async fn retry(robot: &Interpreter, boards: &mut [Board; 4], failed: &mut u8) {
+    for (i, b) in boards.iter_mut().enumerate() {
+        if *failed & (1 << i) == 0 {
+            continue;
+        }
+        let outputs = robot.frame().outputs(i);
+        let result = match bus::within(b.init()).await {
+            Ok(()) if outputs != 0 => bus::within(b.set_outputs(outputs)).await,
+            other => other,
+        };
+        match result {
+            Ok(()) => *failed &= !(1 << i),
+            Err(Fault::Failed) => {}
+            Err(Fault::TimedOut) => {
+                *failed = ALL;
+                return;
+            }
         }
     }
 }
