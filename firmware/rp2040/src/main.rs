@@ -4,9 +4,9 @@
 //!   (GP1, 31250 baud 8N1); every DIN byte goes out again at once on UART0 TX (GP0): MIDI
 //!   thru, as the thesis's board passed its stream on to the flute robot.
 //! - orch-core's interpreter and safety guard with the thesis's keyboard and boards
-//!   (`Interpreter::thesis`), time from embassy-time (µs). DIN bytes go through its decoder;
-//!   a USB-MIDI event carries a whole message, decoded apart so that it never splits a DIN
-//!   message's running status.
+//!   (`Interpreter::thesis`, in a static built at compile time), time from embassy-time
+//!   (µs). DIN bytes go through its decoder; a USB-MIDI event carries a whole message, decoded
+//!   apart so that it never splits a DIN message's running status.
 //! - The four PCA9555 finger boards at 0x21..=0x24 on I2C0 (GP4 SDA, GP5 SCL) at 400 kHz,
 //!   with orch-boards' async driver: each board initialised outputs-0 FIRST, THEN outputs;
 //!   one write per changed board; 3 attempts, then the board is set aside and initialised
@@ -46,7 +46,7 @@ use embassy_usb::UsbDevice;
 use embedded_io_async::{Read, Write};
 use orch_boards::asynch::Pca9555Async;
 use orch_core::{BoardId, Decoder, FingerBoards, Instant, Interpreter};
-use static_cell::StaticCell;
+use static_cell::{ConstStaticCell, StaticCell};
 
 use crate::bus::Fault;
 use crate::led::Led;
@@ -178,7 +178,9 @@ async fn main(spawner: Spawner) {
 
 /// The interpreter loop: MIDI in, the guard's timers, the boards, the watchdog, the LED.
 async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog, mut led: Led<'_>) -> ! {
-    let mut robot = Interpreter::thesis();
+    // The interpreter in a static (≈ 1.2 KB), built at compile time: never on the stack.
+    static ROBOT: ConstStaticCell<Interpreter> = ConstStaticCell::new(Interpreter::thesis());
+    let robot = ROBOT.take();
     let mut usb_decoder: Decoder = Decoder::new();
     let mut failed: u8 = 0;
     for (i, b) in boards.iter_mut().enumerate() {
@@ -208,12 +210,12 @@ async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog, mut led: Le
         }
         match select(INPUT.receive(), Timer::at(wake)).await {
             Either::First(Input::Din(byte, at)) => {
-                advance(&mut robot, at);
+                advance(robot, at);
                 robot.feed(byte, Instant::from_micros(at));
                 led.activity(at);
             }
             Either::First(Input::Usb(bytes, len, at)) => {
-                advance(&mut robot, at);
+                advance(robot, at);
                 led.activity(at);
                 for &b in &bytes[..len as usize] {
                     for message in usb_decoder.push(b) {
@@ -221,14 +223,14 @@ async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog, mut led: Le
                     }
                 }
             }
-            Either::Second(()) => advance(&mut robot, now_us()),
+            Either::Second(()) => advance(robot, now_us()),
         }
-        write(&mut robot, boards, &mut failed).await;
+        write(robot, boards, &mut failed).await;
         if failed != 0 && Clock::now() >= retry_at {
             // Boards set aside are initialised again, and sent their frame, once the bus is
             // usable (a hung transfer ended, SDA cleared).
             if bus::recover().await {
-                retry(&robot, boards, &mut failed).await;
+                retry(robot, boards, &mut failed).await;
             }
             retry_at = Clock::now() + RETRY;
         }
