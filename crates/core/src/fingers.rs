@@ -18,8 +18,6 @@
 //! (35 minutes) before they could wrap, which is safe because every guard limit is at most
 //! 30 minutes ([`MAX_LIMIT`](crate::MAX_LIMIT)).
 
-use crate::time::Instant;
-
 /// The age every stamp is clamped to: 2³¹ µs, about 35.8 minutes.
 pub(crate) const AGE_CAP: u32 = 1 << 31;
 
@@ -92,17 +90,17 @@ impl<const K: usize> Fingers<K> {
         self.velocity[key as usize]
     }
 
-    /// Microseconds since the key's stamp, at most [`AGE_CAP`].
-    pub fn age(&self, key: u8, now: Instant) -> u32 {
-        now.low32()
-            .wrapping_sub(self.stamp[key as usize])
-            .min(AGE_CAP)
+    /// Microseconds since the key's stamp at `now` (the low 32 bits of the clock), at most
+    /// [`AGE_CAP`].
+    pub fn age(&self, key: u8, now: u32) -> u32 {
+        now.wrapping_sub(self.stamp[key as usize]).min(AGE_CAP)
     }
 
-    /// Moves `key` to `phase`, stamped `now`, keeping the down/pending counts.
-    pub fn enter(&mut self, key: u8, phase: u8, now: Instant) {
+    /// Moves `key` to `phase`, stamped `now` (the low 32 bits of the clock), keeping the
+    /// down/pending counts.
+    pub fn enter(&mut self, key: u8, phase: u8, now: u32) {
         self.set_phase(key, phase);
-        self.stamp[key as usize] = now.low32();
+        self.stamp[key as usize] = now;
     }
 
     /// Moves `key` to `phase` without touching its stamp.

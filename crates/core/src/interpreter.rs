@@ -304,7 +304,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         match self.fingers.phase(key) {
             DOWN => KeyPhase::Down,
             PENDING => KeyPhase::Waiting,
-            RELEASING if g.enabled && self.fingers.age(key, self.clock) < rest_us(g) => {
+            RELEASING if g.enabled && self.fingers.age(key, self.clock.low32()) < rest_us(g) => {
                 KeyPhase::Resting
             }
             _ => KeyPhase::Up,
@@ -369,8 +369,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         if changed {
             self.run_due(sink);
         }
-        let now = self.clock;
-        self.last_input = now.low32();
+        let now = self.clock.low32();
+        self.last_input = now;
         for message in self.decoder.push(byte) {
             changed = true;
             self.apply(message, now, sink);
@@ -404,8 +404,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// [`handle`](Self::handle), telling `sink` what became of each note.
     pub fn handle_with<S: NoteSink>(&mut self, message: Message, now: Instant, sink: &mut S) {
         self.tick_with(now, sink);
-        let now = self.clock;
-        self.last_input = now.low32();
+        let now = self.clock.low32();
+        self.last_input = now;
         self.apply(message, now, sink);
         self.refresh();
     }
@@ -421,7 +421,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// ([`NoteEvent::WaitEnded`] with [`DropReason::Stopped`]).
     pub fn all_off_with<S: NoteSink>(&mut self, now: Instant, sink: &mut S) {
         self.advance(now);
-        let now = self.clock;
+        let now = self.clock.low32();
         self.release_everything(now, DropReason::Stopped, sink);
         self.refresh();
     }
@@ -514,13 +514,13 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// [`tick_with`](Self::tick_with)'s work once `wake` has passed; with `every_key`, ignores
     /// `due` and the timed-key mask (the reference for tests).
     fn run_timers<S: NoteSink>(&mut self, sink: &mut S, every_key: bool) {
-        let now = self.clock;
+        let now = self.clock.low32();
         let g = &self.config.guard;
         if !g.enabled {
             return;
         }
         let busy = self.fingers.down + self.fingers.pending > 0;
-        let quiet = now.low32().wrapping_sub(self.last_input);
+        let quiet = now.wrapping_sub(self.last_input);
         let starved = g.watchdog.is_some_and(|wd| quiet >= wd.as_micros())
             || (self.sensing && quiet >= ACTIVE_SENSING_TIMEOUT.as_micros());
         if starved {
@@ -531,7 +531,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 self.release_everything(now, DropReason::Cancelled, sink);
             }
         }
-        if !self.due.passed(now.low32()) && !every_key {
+        if !self.due.passed(now) && !every_key {
             return;
         }
         let g = &self.config.guard;
@@ -598,7 +598,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 soonest(gap - age);
             }
         }
-        self.due = next.map_or(Kept::NEVER, |n| Kept::at(now.low32().wrapping_add(n)));
+        self.due = next.map_or(Kept::NEVER, |n| Kept::at(now.wrapping_add(n)));
     }
 
     fn keys(&self) -> u8 {
@@ -677,7 +677,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         Some((left * window / (window - on)).min(u32::MAX as u64) as u32)
     }
 
-    fn apply<S: NoteSink>(&mut self, message: Message, now: Instant, sink: &mut S) {
+    fn apply<S: NoteSink>(&mut self, message: Message, now: u32, sink: &mut S) {
         match message {
             Message::NoteOn {
                 channel,
@@ -722,7 +722,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         channel: Channel,
         note: Note,
         velocity: Velocity,
-        now: Instant,
+        now: u32,
         sink: &mut S,
     ) {
         self.count(|s| s.note_ons += 1);
@@ -830,7 +830,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         }
     }
 
-    fn note_off(&mut self, channel: Channel, note: Note, now: Instant) {
+    fn note_off(&mut self, channel: Channel, note: Note, now: u32) {
         let pedal = self.config.sustain && self.pedals & channel.bit() != 0;
         let was_on = if pedal {
             // The pedal holds the note (and its key) until it goes up.
@@ -848,7 +848,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         }
     }
 
-    fn pedal_up(&mut self, channel: Channel, now: Instant) {
+    fn pedal_up(&mut self, channel: Channel, now: u32) {
         self.pedals &= !channel.bit();
         self.notes.release_sustained(channel);
         self.release_unheld(now);
@@ -857,7 +857,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// Switches off every note of `channel`. All Sound Off (`sound_off`) lets go of the
     /// pedal's notes as well; All Notes Off leaves a pedal that is down holding them, as
     /// each note's own Note-Off would.
-    fn channel_off(&mut self, channel: Channel, sound_off: bool, now: Instant) {
+    fn channel_off(&mut self, channel: Channel, sound_off: bool, now: u32) {
         let pedal = self.config.sustain && self.pedals & channel.bit() != 0;
         if pedal && !sound_off {
             self.notes.sustain_channel(channel);
@@ -869,7 +869,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     }
 
     /// Lets go of every key that no note holds any more.
-    fn release_unheld(&mut self, now: Instant) {
+    fn release_unheld(&mut self, now: u32) {
         for key in 0..self.keys() {
             let phase = self.fingers.phase(key);
             // A key striking for `min_press` (RELEASE_AFTER) is no note's any more: it lets
@@ -881,7 +881,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         }
     }
 
-    fn release_everything<S: NoteSink>(&mut self, now: Instant, why: DropReason, sink: &mut S) {
+    fn release_everything<S: NoteSink>(&mut self, now: u32, why: DropReason, sink: &mut S) {
         self.notes.clear();
         self.pedals = 0;
         // Only keys down or waiting have anything to release or cancel.
@@ -913,7 +913,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     }
 
     /// Strikes `key` now (`true`), or once its re-strike gap has passed (`false`).
-    fn strike(&mut self, key: u8, folded: bool, now: Instant) -> bool {
+    fn strike(&mut self, key: u8, folded: bool, now: u32) -> bool {
         let g = self.config.guard;
         let resting = self.fingers.phase(key) == RELEASING
             && g.enabled
@@ -923,7 +923,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             self.fingers.set_phase(key, PENDING);
             self.fingers.set_flag(key, FOLDED, folded);
             self.count(|s| s.restrikes_delayed += 1);
-            self.due = self.due.min(now.low32().wrapping_add(wait));
+            self.due = self.due.min(now.wrapping_add(wait));
             false
         } else {
             self.count_sounded(folded);
@@ -933,7 +933,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 .map_or(u32::MAX, Duration::as_micros)
                 .min(self.duty_cut_after(key).unwrap_or(u32::MAX));
             if g.enabled && limit != u32::MAX {
-                self.due = self.due.min(now.low32().wrapping_add(limit));
+                self.due = self.due.min(now.wrapping_add(limit));
             }
             true
         }
@@ -947,7 +947,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         }
     }
 
-    fn press_now(&mut self, key: u8, now: Instant) {
+    fn press_now(&mut self, key: u8, now: u32) {
         if let Some(d) = self.duty() {
             // The key cooled at the duty while it was up.
             let up = self.fingers.age(key, now) as u64;
@@ -968,7 +968,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// (pressed and released within one flush: a zero-length note), that is still waiting for
     /// its re-strike gap, or that struck late after waiting, is not lost: it is held for the
     /// guard's `min_press` from its strike.
-    fn release_key(&mut self, key: u8, now: Instant) {
+    fn release_key(&mut self, key: u8, now: u32) {
         match self.fingers.phase(key) {
             DOWN => {
                 let g = &self.config.guard;
@@ -982,7 +982,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 let min = g.min_press.as_micros();
                 if unwritten && g.enabled && age < min {
                     self.fingers.set_flag(key, RELEASE_AFTER, true);
-                    self.due = self.due.min(now.low32().wrapping_add(min - age));
+                    self.due = self.due.min(now.wrapping_add(min - age));
                 } else {
                     self.release_now(key, now);
                 }
@@ -997,7 +997,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     }
 
     /// Releases `key` now if it is down.
-    fn release_now(&mut self, key: u8, now: Instant) {
+    fn release_now(&mut self, key: u8, now: u32) {
         if self.fingers.phase(key) == DOWN {
             if let Some(d) = self.duty() {
                 // It heated at (1 − duty) while it was down; rounded up, to be safe.
@@ -1015,7 +1015,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     }
 
     /// Releases `key` if down, and cancels a delayed strike: for resets and cuts.
-    fn cancel_key<S: NoteSink>(&mut self, key: u8, now: Instant, why: DropReason, sink: &mut S) {
+    fn cancel_key<S: NoteSink>(&mut self, key: u8, now: u32, why: DropReason, sink: &mut S) {
         if self.fingers.phase(key) == PENDING {
             // It never struck: it keeps resting from its earlier release.
             if why == DropReason::Stopped {

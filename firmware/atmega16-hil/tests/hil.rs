@@ -630,7 +630,7 @@ fn figures() {
     );
     // Issue 11's budget, at the thesis's bus clock: at most 1.2 × the write's own bus time.
     // (A faster clock shortens the write, not the firmware's work after the last byte: at
-    // 222 222 Hz the same work is 1.2–1.4 × a 171 µs write, printed above.)
+    // 222 222 Hz the same work is 1.1–1.25 × a 171 µs write, printed above.)
     assert!(
         twi_hz() != 83_333 || rmax <= 1.2 * real_write,
         "last stop bit to the write done: up to {rmax:.0} µs, over 1.2 × the write's {real_write:.0} µs"
