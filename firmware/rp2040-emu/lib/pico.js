@@ -171,6 +171,18 @@ class Pico {
   }
 
   /**
+   * The firmware panics now, as a failed check would: the core goes on at `core::panicking::
+   * panic_fmt` (with no message: the firmware's handler reads none), in thread mode.
+   */
+  panicNow() {
+    const name = Object.keys(this.elf.symbols).find((n) => n.includes('9panicking9panic_fmt'));
+    if (!name) throw new Error('the ELF has no core::panicking::panic_fmt');
+    const core = this.chip.core;
+    core.PC = this.elf.symbols[name].value & ~1;
+    core.waiting = false;
+  }
+
+  /**
    * The firmware hangs for `us` (a loop with interrupts off, a lock-up): the core runs no
    * instruction while time and the peripherals go on. Ends early if the watchdog resets the
    * chip meanwhile (the reset itself happens at the next run).

@@ -85,6 +85,29 @@ test('a hung firmware trips the watchdog, and the keys come up released', () => 
   console.log(`  watchdog reset ${fmt(resetMs)} ms after the firmware hung; boards 0 and 1 released ${fmt((after.find((t) => t.board === 1).stopNs - p.resets[0]) / 1000)} µs after it`);
 });
 
+test('a panic releases every key at once, then the watchdog resets the Pico', () => {
+  const { p } = booted();
+  p.sendDin([0x90, 36, 100, 0x90, 60, 100, 0x90, 76, 100, 0x90, 96, 100]); // one key a board
+  p.runUs(5_000);
+  assert.deepEqual(p.outputs(), [1, 1 << 8, 1 << 8, 1 << 12]);
+  const at = p.nowNs;
+  const fromLog = p.bus.log.length;
+  p.panicNow();
+  p.runUs(2_000);
+  assert.deepEqual(p.outputs(), [0, 0, 0, 0], 'every key up within 2 ms of the panic');
+  const writes = p.bus.log.slice(fromLog);
+  assert.deepEqual(writes.map((t) => [t.board, t.bytes]), [0, 1, 2, 3].map((b) => [b, [2, 0, 0]]));
+  const ms = (writes[3].stopNs - at) / 1e6;
+  assert.equal(p.resets.length, 0, 'not by a reset');
+  p.runUs(700_000);
+  assert.equal(p.resets.length, 1, 'then the watchdog resets it');
+  assert.ok((p.resets[0] - at) / 1e6 > 400, 'after its 0.5 s');
+  p.sendDin([0x90, 60, 100]);
+  p.runUs(5_000);
+  assert.equal(p.outputs()[1], 1 << 8, 'and it plays again');
+  console.log(`  a panic: every key up ${fmt(ms * 1000)} µs after it (four writes), the watchdog's reset ${fmt((p.resets[0] - at) / 1e6)} ms after it`);
+});
+
 test('a board holding SCL low is timed out: the loop goes on, and every board is initialised again once it lets go', () => {
   const { p } = booted();
   p.sendDin([0x90, 36, 100, 0x90, 60, 100]); // board 0 bit 0, board 1 bit 8

@@ -13,7 +13,7 @@
 use core::future::Future;
 
 use embassy_rp::pac;
-use embassy_time::{with_timeout, Duration, Timer};
+use embassy_time::{with_timeout, Duration, Instant, Timer};
 
 /// The longest a board operation may take: a write is 38 SCL periods (95 µs at 400 kHz), an
 /// initialisation two writes.
@@ -118,4 +118,37 @@ fn drive_low(mask: u32) {
 /// Lets the pins in `mask` go (the pull-ups raise them).
 fn let_go(mask: u32) {
     pac::SIO.gpio_oe(0).value_clr().write_value(mask);
+}
+
+/// For the panic handler: every board's outputs to 0 now, through the I2C registers, with
+/// interrupts off and every wait bounded (a hung bus is given up on: the watchdog's reset and
+/// power-up then release the keys). `addresses`: the boards' 7-bit addresses.
+pub fn release_all_now(addresses: &[u8]) {
+    let i2c = pac::I2C0;
+    // End the transfer that was going on, if any.
+    i2c.ic_enable().modify(|w| w.set_abort(true));
+    spin_until(1_000, || !i2c.ic_enable().read().abort());
+    for &address in addresses {
+        i2c.ic_enable().write(|w| w.set_enable(false));
+        i2c.ic_tar().write(|w| w.set_ic_tar(address as u16));
+        i2c.ic_enable().write(|w| w.set_enable(true));
+        let _ = i2c.ic_clr_intr().read();
+        for (byte, last) in [(0x02, false), (0x00, false), (0x00, true)] {
+            i2c.ic_data_cmd().write(|w| {
+                w.set_dat(byte);
+                w.set_stop(last);
+            });
+        }
+        spin_until(1_000, || {
+            let r = i2c.ic_raw_intr_stat().read();
+            r.stop_det() || r.tx_abrt()
+        });
+    }
+}
+
+/// Spins until `done` or `limit_us` have passed (the timer's counter, readable with
+/// interrupts off).
+fn spin_until(limit_us: u64, mut done: impl FnMut() -> bool) {
+    let end = Instant::now() + Duration::from_micros(limit_us);
+    while !done() && Instant::now() < end {}
 }

@@ -13,7 +13,7 @@
 //!   again every 10 ms with its frame. Every bus operation has a time limit and a hung bus is
 //!   recovered ([`bus`]): a hung board no longer hangs the loop.
 //! - The watchdog (0.5 s), fed by the interpreter loop: a hung loop resets the Pico, and
-//!   power-up releases every key.
+//!   power-up releases every key. A panic releases them at once, then waits for the reset.
 //! - The status LED (GP25): a flash for MIDI coming in, blinking for a fault ([`led`]).
 //! - The pin-out in one place: [`Pins`].
 #![no_std]
@@ -358,7 +358,9 @@ async fn din_task(mut rx: BufferedUartRx, mut thru: BufferedUartTx) -> ! {
 
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
-    // The watchdog resets the Pico, and power-up releases every key.
+    // Every key up at once, then the watchdog resets the Pico (and power-up releases every
+    // key again, should the bus have been hung now).
     cortex_m::interrupt::disable();
+    bus::release_all_now(&ADDRESSES);
     loop {}
 }
