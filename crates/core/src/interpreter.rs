@@ -364,11 +364,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
 
     /// [`feed`](Self::feed), telling `sink` what became of each note ([`NoteEvent`]).
     pub fn feed_with<S: NoteSink>(&mut self, byte: u8, now: Instant, sink: &mut S) -> bool {
-        self.advance(now);
-        let mut changed = self.wake.passed(self.clock.low32());
-        if changed {
-            self.run_due(sink);
-        }
+        let mut changed = self.tick_due(now, sink);
         let now = self.clock.low32();
         self.last_input = now;
         for message in self.decoder.push(byte) {
@@ -485,13 +481,20 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// ([`NoteEvent::WaitOver`]) or are cancelled.
     #[inline]
     pub fn tick_with<S: NoteSink>(&mut self, now: Instant, sink: &mut S) {
+        self.tick_due(now, sink);
+    }
+
+    /// [`tick_with`](Self::tick_with), saying whether the guard's timers ran.
+    #[inline(always)]
+    fn tick_due<S: NoteSink>(&mut self, now: Instant, sink: &mut S) -> bool {
         self.advance(now);
         // Nothing can be due before `wake`: one compare on every byte fed (inlined there; the
         // timers' work is not).
-        if !self.wake.passed(self.clock.low32()) {
-            return;
+        let due = self.wake.passed(self.clock.low32());
+        if due {
+            self.run_due(sink);
         }
-        self.run_due(sink);
+        due
     }
 
     /// [`tick_with`](Self::tick_with)'s work once `wake` has passed.
