@@ -18,6 +18,8 @@
 //! (35 minutes) before they could wrap, which is safe because every guard limit is at most
 //! 30 minutes ([`MAX_LIMIT`](crate::MAX_LIMIT)).
 
+use crate::bits::bit8;
+
 /// The age every stamp is clamped to: 2³¹ µs, about 35.8 minutes.
 pub(crate) const AGE_CAP: u32 = 1 << 31;
 
@@ -116,7 +118,7 @@ impl<const K: usize> Fingers<K> {
             PENDING => self.pending += 1,
             _ => {}
         }
-        let bit = 1 << (k % 8);
+        let bit = bit8(key);
         let keep = if phase == DOWN || phase == PENDING {
             self.timed[k / 8 % (MASK_KEYS / 8)] |= bit;
             self.flags[k] & (FOLDED | RELEASE_AFTER | LATE)
@@ -132,11 +134,12 @@ impl<const K: usize> Fingers<K> {
         let end = K.min(MASK_KEYS);
         let mut k = from as usize;
         while k < end {
-            let bits = self.timed[k / 8] >> (k % 8);
+            // The bits of keys `k` and up in `k`'s byte (no shift by `k % 8`: see `bits`).
+            let bits = self.timed[k / 8] & bit8(k as u8).wrapping_neg();
             if bits == 0 {
                 k = (k | 7) + 1;
             } else {
-                k += bits.trailing_zeros() as usize;
+                k = (k & !7) + bits.trailing_zeros() as usize;
                 return (k < end).then_some(k as u8);
             }
         }

@@ -1,5 +1,6 @@
 //! The finger frame: what every output of every board should be, and which boards changed.
 
+use crate::bits::bit16;
 use crate::keymap::Layout;
 use crate::output::{BoardId, FingerBoards};
 
@@ -54,7 +55,7 @@ impl<const B: usize> FingerFrame<B> {
 
     /// Whether output `bit` of `board` was on in the last write to that board.
     pub fn is_written(&self, board: u8, bit: u8) -> bool {
-        self.written[board as usize] & (1 << (bit & 15)) != 0
+        self.written[board as usize] & bit16(bit) != 0
     }
 
     /// Whether any board needs a write.
@@ -64,7 +65,7 @@ impl<const B: usize> FingerFrame<B> {
 
     /// Sets or clears one output.
     pub fn set(&mut self, board: u8, bit: u8, on: bool) {
-        let mask = 1u16 << (bit & 15);
+        let mask = bit16(bit);
         let word = &mut self.outputs[board as usize];
         if on {
             *word |= mask;

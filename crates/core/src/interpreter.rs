@@ -140,8 +140,11 @@ pub struct Interpreter<
     frame: FingerFrame<B>,
     /// Channels whose sustain pedal is down.
     pedals: u16,
-    /// The clock as last seen.
-    clock: Instant,
+    /// The clock as last seen: its low 32 bits (all that the per-byte work uses)…
+    clock: u32,
+    /// … and its high 32 bits, kept apart so that the common step (a later time, no multiple
+    /// of 2³⁰ µs passed) loads, compares and stores 4 bytes, not 8, on an 8-bit MCU.
+    epoch: u32,
     /// When the last input arrived: the low 32 bits, clamped like the keys' stamps so that
     /// its age never wraps.
     last_input: u32,
@@ -219,7 +222,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             fingers: Fingers::new(),
             frame: FingerFrame::new(),
             pedals: 0,
-            clock: Instant::ZERO,
+            clock: 0,
+            epoch: 0,
             last_input: 0,
             sensing: false,
             due: Kept::NEVER,
@@ -304,7 +308,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         match self.fingers.phase(key) {
             DOWN => KeyPhase::Down,
             PENDING => KeyPhase::Waiting,
-            RELEASING if g.enabled && self.fingers.age(key, self.clock.low32()) < rest_us(g) => {
+            RELEASING if g.enabled && self.fingers.age(key, self.clock) < rest_us(g) => {
                 KeyPhase::Resting
             }
             _ => KeyPhase::Up,
@@ -364,8 +368,28 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
 
     /// [`feed`](Self::feed), telling `sink` what became of each note ([`NoteEvent`]).
     pub fn feed_with<S: NoteSink>(&mut self, byte: u8, now: Instant, sink: &mut S) -> bool {
-        let mut changed = self.tick_due(now, sink);
-        let now = self.clock.low32();
+        self.advance(now);
+        self.feed_now(byte, sink)
+    }
+
+    /// [`feed`](Self::feed) for an 8-bit MCU: `now` is the low 32 bits of the µs clock, and
+    /// all the time arithmetic of a byte is 32-bit.
+    ///
+    /// Exact as long as the times passed to the `*_low32` methods (and to the others, if they
+    /// are mixed) come less than 2³⁰ µs (17.8 minutes) apart: a firmware whose input may stay
+    /// silent for longer calls [`tick_low32`](Self::tick_low32) now and then, say every
+    /// second. A longer gap is taken as time running backwards or a shorter jump, which may
+    /// keep a key resting or a deadline waiting for up to another 2³² µs.
+    pub fn feed_low32(&mut self, byte: u8, now: u32) -> bool {
+        self.advance_low32(now);
+        self.feed_now(byte, &mut ())
+    }
+
+    /// [`feed_with`](Self::feed_with)'s work once the clock has moved.
+    #[inline(always)]
+    fn feed_now<S: NoteSink>(&mut self, byte: u8, sink: &mut S) -> bool {
+        let mut changed = self.run_if_due(sink);
+        let now = self.clock;
         self.last_input = now;
         for message in self.decoder.push(byte) {
             changed = true;
@@ -400,7 +424,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// [`handle`](Self::handle), telling `sink` what became of each note.
     pub fn handle_with<S: NoteSink>(&mut self, message: Message, now: Instant, sink: &mut S) {
         self.tick_with(now, sink);
-        let now = self.clock.low32();
+        let now = self.clock;
         self.last_input = now;
         self.apply(message, now, sink);
         self.refresh();
@@ -417,7 +441,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// ([`NoteEvent::WaitEnded`] with [`DropReason::Stopped`]).
     pub fn all_off_with<S: NoteSink>(&mut self, now: Instant, sink: &mut S) {
         self.advance(now);
-        let now = self.clock.low32();
+        let now = self.clock;
         self.release_everything(now, DropReason::Stopped, sink);
         self.refresh();
     }
@@ -442,7 +466,16 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         // With no key down or waiting, the quiet rules have nothing to cut: only `due`.
         let busy = self.fingers.down + self.fingers.pending > 0;
         let deadline = if busy { self.wake } else { self.due };
-        deadline.set.then(|| deadline.get(self.clock))
+        deadline.set.then(|| deadline.get(self.instant()))
+    }
+
+    /// [`next_deadline`](Self::next_deadline)'s low 32 bits, for the `*_low32` methods:
+    /// compare it with the clock by wrapping difference (it lies less than 2³¹ µs from the
+    /// clock as last seen, either way).
+    pub fn next_deadline_low32(&self) -> Option<u32> {
+        let busy = self.fingers.down + self.fingers.pending > 0;
+        let deadline = if busy { self.wake } else { self.due };
+        deadline.set.then_some(deadline.at)
     }
 
     /// Recomputes [`wake`](Self::wake) from `due`,
@@ -484,13 +517,27 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         self.tick_due(now, sink);
     }
 
+    /// [`tick`](Self::tick) for an 8-bit MCU, with the low 32 bits of the µs clock: see
+    /// [`feed_low32`](Self::feed_low32) for how far apart the times may be. Returns whether
+    /// the guard's timers ran (flush then, and ask for the next deadline again).
+    pub fn tick_low32(&mut self, now: u32) -> bool {
+        self.advance_low32(now);
+        self.run_if_due(&mut ())
+    }
+
     /// [`tick_with`](Self::tick_with), saying whether the guard's timers ran.
     #[inline(always)]
     fn tick_due<S: NoteSink>(&mut self, now: Instant, sink: &mut S) -> bool {
         self.advance(now);
+        self.run_if_due(sink)
+    }
+
+    /// Runs the guard's timers if `wake` has passed, saying whether they ran.
+    #[inline(always)]
+    fn run_if_due<S: NoteSink>(&mut self, sink: &mut S) -> bool {
         // Nothing can be due before `wake`: one compare on every byte fed (inlined there; the
         // timers' work is not).
-        let due = self.wake.passed(self.clock.low32());
+        let due = self.wake.passed(self.clock);
         if due {
             self.run_due(sink);
         }
@@ -517,7 +564,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// [`tick_with`](Self::tick_with)'s work once `wake` has passed; with `every_key`, ignores
     /// `due` and the timed-key mask (the reference for tests).
     fn run_timers<S: NoteSink>(&mut self, sink: &mut S, every_key: bool) {
-        let now = self.clock.low32();
+        let now = self.clock;
         let g = &self.config.guard;
         if !g.enabled {
             return;
@@ -608,19 +655,54 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         self.config.range.keys() as u8
     }
 
+    /// The clock as last seen.
+    #[inline(always)]
+    fn instant(&self) -> Instant {
+        Instant::from_micros(((self.epoch as u64) << 32) | self.clock as u64)
+    }
+
     /// Moves the clock to `now` (never back) and keeps per-key ages from wrapping.
     #[inline(always)]
     fn advance(&mut self, now: Instant) {
-        if now <= self.clock {
+        let before = self.instant();
+        if now <= before {
             return;
         }
-        let before = self.clock;
-        self.clock = now;
-        // Passed a multiple of 2³⁰ µs: the bits above differ. `before` is in registers already,
-        // so this costs no loads (it was kept as a field, the last multiple passed).
+        self.clock = now.low32();
+        self.epoch = (now.as_micros() >> 32) as u32;
+        // Passed a multiple of 2³⁰ µs: the bits above differ.
         if now.as_micros() ^ before.as_micros() >= CLAMP_EVERY {
             self.clamp_ages(before, now);
         }
+    }
+
+    /// [`advance`](Self::advance) given the clock's low 32 bits, less than 2³⁰ µs after the
+    /// clock as last seen (see [`feed_low32`](Self::feed_low32)): 4-byte loads, compares and
+    /// stores on the common step.
+    #[inline(always)]
+    fn advance_low32(&mut self, now: u32) {
+        let before = self.clock;
+        if now.wrapping_sub(before) as i32 <= 0 {
+            return;
+        }
+        self.clock = now;
+        // Passed a multiple of 2³⁰ µs: bit 30 or 31 differs.
+        if now ^ before >= CLAMP_EVERY as u32 {
+            self.passed_low32(before);
+        }
+    }
+
+    /// [`advance_low32`](Self::advance_low32)'s cold path: the high bits follow a wrap of the
+    /// low ones, and the ages are clamped.
+    #[cold]
+    #[inline(never)]
+    fn passed_low32(&mut self, before: u32) {
+        let epoch = self.epoch;
+        if self.clock < before {
+            self.epoch = epoch.wrapping_add(1);
+        }
+        let before = Instant::from_micros(((epoch as u64) << 32) | before as u64);
+        self.clamp_ages(before, self.instant());
     }
 
     /// Keeps per-key ages from wrapping, when the clock moved from `before` to `now` past a

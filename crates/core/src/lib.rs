@@ -61,7 +61,11 @@
 //! time of the last input in 32 bits (the low bits of the clock, compared by wrapping
 //! difference; exact while they lie within 2³¹ µs of the clock, which a jump of the clock past
 //! that preserves by marking them passed): on an 8-bit MCU every byte's work on time is then
-//! 32-bit.
+//! 32-bit. An 8-bit MCU can go further with the `*_low32` methods
+//! ([`Interpreter::feed_low32`], [`Interpreter::tick_low32`],
+//! [`Interpreter::next_deadline_low32`]): it passes only the low 32 bits of its clock, and the
+//! interpreter keeps its clock as two 32-bit halves, so that a byte's time arithmetic is 32-bit
+//! end to end (exact while the calls come less than 2³⁰ µs apart).
 //!
 //! ## Cargo features
 //!
@@ -79,6 +83,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod bits;
 mod config;
 mod decoder;
 mod fingers;

@@ -105,7 +105,7 @@ impl Channel {
 
     /// This channel's bit in a [`ChannelMask`]-style `u16`.
     pub const fn bit(self) -> u16 {
-        1 << self.0
+        crate::bits::bit16(self.0)
     }
 }
 

@@ -1,5 +1,6 @@
 //! Time from Timer1: 8 MHz / 8 = one tick a microsecond, extended past 16 bits by counting
-//! overflows (every 65.536 ms) in an interrupt: a 48-bit microsecond clock, 8.9 years.
+//! overflows (every 65.536 ms) in an interrupt: a 48-bit microsecond clock, 8.9 years, of
+//! which orch-core is given the low 32 bits.
 
 use avr_device::atmega16::TC1;
 use core::ptr::{addr_of, addr_of_mut, read_volatile, write_volatile};
@@ -47,21 +48,22 @@ fn read() -> (u32, u16) {
     })
 }
 
-/// Microseconds since power-up.
-pub fn now_us() -> u64 {
+/// Microseconds since power-up, the low 32 bits (orch-core's `*_low32` methods).
+#[inline(always)]
+pub fn now_us() -> u32 {
     let (ovf, t) = read();
-    ((ovf as u64) << 16) | t as u64
+    (ovf << 16) | t as u32
 }
 
-/// The full time of a stamp taken at most 65 ms ago (the low 16 bits of the clock then). A
-/// stamp older than that (the main loop stalled) comes out up to 65 ms late, never in the
-/// future. Built from the overflow count (one less if Timer1 has wrapped since the stamp),
-/// with no 64-bit arithmetic.
+/// The low 32 bits of the time of a stamp taken at most 65 ms ago (the low 16 bits of the
+/// clock then). A stamp older than that (the main loop stalled) comes out up to 65 ms late,
+/// never in the future. Built from the overflow count (one less if Timer1 has wrapped since
+/// the stamp).
 #[inline(always)]
-pub fn since(stamp: u16) -> u64 {
+pub fn since(stamp: u16) -> u32 {
     let (ovf, t) = read();
     let ovf = if t < stamp { ovf.wrapping_sub(1) } else { ovf };
-    ((ovf as u64) << 16) | stamp as u64
+    (ovf << 16) | stamp as u32
 }
 
 #[avr_device::interrupt(atmega16)]
