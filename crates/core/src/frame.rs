@@ -4,15 +4,29 @@ use crate::bits::bit16;
 use crate::keymap::Layout;
 use crate::output::{BoardId, FingerBoards};
 
-/// `B` boards × 16 outputs, with a dirty flag per board.
+/// `B` boards (at most 16) × 16 outputs, with a dirty flag per board.
 ///
 /// A board is dirty when its outputs differ from what was last written to it, so a key that
 /// goes down and back up between two flushes costs no bus write.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+///
+/// Two frames are equal when their outputs and what was written are: which boards were
+/// touched since the last flush ([`touched`](Self::touched)) is bookkeeping, not state.
+#[derive(Clone, Copy, Debug)]
 pub struct FingerFrame<const B: usize> {
     outputs: [u16; B],
     written: [u16; B],
+    /// One bit a board whose outputs were set or cleared since the last flush: the boards
+    /// [`flush`](Self::flush) visits (it writes those that are dirty).
+    touched: u16,
 }
+
+impl<const B: usize> PartialEq for FingerFrame<B> {
+    fn eq(&self, other: &Self) -> bool {
+        self.outputs == other.outputs && self.written == other.written
+    }
+}
+
+impl<const B: usize> Eq for FingerFrame<B> {}
 
 /// A board write failed; the board stays dirty so the next flush tries again.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,10 +46,21 @@ impl<const B: usize> Default for FingerFrame<B> {
 impl<const B: usize> FingerFrame<B> {
     /// Every output off, and every board taken as written with 0 (as after initialisation).
     pub const fn new() -> Self {
+        assert!(B <= 16, "a frame has at most 16 boards");
         Self {
             outputs: [0; B],
             written: [0; B],
+            touched: 0,
         }
+    }
+
+    /// Whether any board was touched since the last flush: `false` means that
+    /// [`flush`](Self::flush) has nothing to write; `true`, that it may have (a key pressed and
+    /// released in between leaves its board touched but not dirty). One load and compare,
+    /// for a firmware that checks after every message.
+    #[inline(always)]
+    pub fn touched(&self) -> bool {
+        self.touched != 0
     }
 
     /// The wanted outputs of `board`.
@@ -66,6 +91,7 @@ impl<const B: usize> FingerFrame<B> {
     /// Sets or clears one output.
     pub fn set(&mut self, board: u8, bit: u8, on: bool) {
         let mask = bit16(bit);
+        self.touched |= bit16(board);
         let word = &mut self.outputs[board as usize];
         if on {
             *word |= mask;
@@ -77,7 +103,11 @@ impl<const B: usize> FingerFrame<B> {
     /// Turns every output off (the boards become dirty where they were not already off).
     pub fn clear(&mut self) {
         self.outputs = [0; B];
+        self.touched = Self::ALL;
     }
+
+    /// Every board's bit in [`touched`](Self::touched).
+    const ALL: u16 = if B >= 16 { u16::MAX } else { (1 << B) - 1 };
 
     /// Marks every board as unknown, so the next flush writes all of them (after a bus error
     /// or a board reset, when what the board holds is no longer known).
@@ -85,6 +115,7 @@ impl<const B: usize> FingerFrame<B> {
         for (w, o) in self.written.iter_mut().zip(self.outputs.iter()) {
             *w = !*o;
         }
+        self.touched = Self::ALL;
     }
 
     /// Writes every dirty board, in board order, one write each. Returns how many boards were
@@ -95,18 +126,27 @@ impl<const B: usize> FingerFrame<B> {
         out: &mut O,
     ) -> Result<u8, FlushError<O::Error>> {
         let mut n = 0;
-        for board in 0..B {
-            if self.outputs[board] == self.written[board] {
-                continue;
+        // Only the boards touched since the last flush can be dirty: one bit each, shifted
+        // out one board at a time (a constant shift, cheap on an 8-bit MCU).
+        let mut touched = self.touched;
+        self.touched = 0;
+        let mut board = 0;
+        while touched != 0 {
+            if touched & 1 != 0 && self.outputs[board] != self.written[board] {
+                let id = BoardId {
+                    index: board as u8,
+                    address: layout.boards[board].address,
+                };
+                if let Err(error) = out.write_board(id, self.outputs[board]) {
+                    // This board and the ones after it are still to be written.
+                    self.touched |= touched << board;
+                    return Err(FlushError { board: id, error });
+                }
+                self.written[board] = self.outputs[board];
+                n += 1;
             }
-            let id = BoardId {
-                index: board as u8,
-                address: layout.boards[board].address,
-            };
-            out.write_board(id, self.outputs[board])
-                .map_err(|error| FlushError { board: id, error })?;
-            self.written[board] = self.outputs[board];
-            n += 1;
+            touched >>= 1;
+            board += 1;
         }
         Ok(n)
     }

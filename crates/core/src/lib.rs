@@ -47,7 +47,7 @@
 //! | the 61 keys' heat for the duty limit (feature `duty-limit`, off on the ATmega16) | 122 (+6 padding) |
 //! | held notes, [`NotePool<32>`](NotePool) (for MCUs: 32 notes played or sustained at once, twice the power budget) | 97 |
 //! | held notes, [`NoteTable`] (the default: every channel of every note, played and sustained, exact under any load) | 512 |
-//! | frame 16, decoder 12 (28 with `stats`: its counters), clock 8, last input 4 and kept deadlines 10 (32-bit, see below), pedals and flags | ≈ 60 |
+//! | frame 18 (with its mask of the boards touched since the last flush), decoder 12 (28 with `stats`: its counters), clock 8, last input 4 and kept deadlines 10 (32-bit, see below), pedals and flags | ≈ 60 |
 //! | the configuration (none with a constant one: [`Thesis`]) | 68 |
 //! | the statistics and the decoder's counters (feature `stats`, off on the ATmega16) | 80 (+8 padding) |
 //! | `Interpreter<4, 61, NotePool<32>>` without `duty-limit` and `stats` | 616 |

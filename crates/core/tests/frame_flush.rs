@@ -147,3 +147,33 @@ fn the_frame_on_its_own() {
     frame.clear();
     assert!(frame.is_dirty(1));
 }
+
+/// `touched` says whether a flush may have anything to write: a firmware checks it after
+/// every message instead of comparing every board.
+#[test]
+fn touched_says_whether_a_flush_may_write() {
+    let layout = Layout::<16>::sequential(core::array::from_fn(|i| 0x20 + i as u8), 256);
+    let mut frame = FingerFrame::<16>::new();
+    let mut boards = Recording::<8>::new();
+    assert!(!frame.touched(), "a new frame");
+    frame.set(15, 3, true);
+    assert!(frame.touched());
+    assert_eq!(frame.flush(&layout, &mut boards), Ok(1));
+    assert!(!frame.touched(), "flushed");
+    // Down and up again: touched, but nothing to write.
+    frame.set(2, 0, true);
+    frame.set(2, 0, false);
+    assert!(frame.touched() && !frame.any_dirty());
+    assert_eq!(frame.flush(&layout, &mut boards), Ok(0));
+    assert!(!frame.touched());
+    frame.invalidate();
+    assert!(frame.touched(), "invalidated: every board to be written");
+    assert_eq!(frame.flush(&layout, &mut boards), Ok(16));
+    frame.clear();
+    assert!(frame.touched(), "cleared");
+    assert_eq!(
+        frame.flush(&layout, &mut boards),
+        Ok(1),
+        "board 15 goes off"
+    );
+}

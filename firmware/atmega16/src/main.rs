@@ -196,13 +196,12 @@ fn tick(robot: &mut Robot, at: u32) {
     }
 }
 
-/// Queues the boards that changed. Most bytes change none: the check is inline, four
-/// compares without branches between them (a loop out of line cost ≈ 100 cycles a byte, most
-/// of it saving registers); orch-core's flush, which visits every board, only when one did.
+/// Queues the boards that changed. Most messages change none: the check is inline, one
+/// byte's compare (the boards touched since the last flush); orch-core's flush, which visits
+/// those boards and writes the dirty ones, only when one was.
 #[inline(always)]
 fn flush(robot: &mut Robot) {
-    let f = robot.frame();
-    if f.is_dirty(0) | f.is_dirty(1) | f.is_dirty(2) | f.is_dirty(3) {
+    if robot.frame().touched() {
         flush_dirty(robot);
     }
 }
