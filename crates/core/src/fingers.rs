@@ -168,15 +168,27 @@ impl<const K: usize> Fingers<K> {
         self.velocity[key as usize] = velocity;
     }
 
-    /// Clamps every stamp older than [`AGE_CAP`] at `now` (the low 32 bits of the clock), so
-    /// that no age can wrap. With `all`, every stamp is taken as at least that old (the clock
-    /// jumped by more than the cap).
-    pub fn clamp_ages(&mut self, now: u32, all: bool) {
-        let floor = now.wrapping_sub(AGE_CAP);
+    /// Clamps every stamp older than [`AGE_CAP`] at `before`, then at `now` (the low 32 bits
+    /// of the clock before and after it passed a multiple of 2³⁰ µs), so that no age can
+    /// wrap. With `far`, every stamp is taken as at least that old at `now` (the clock jumped
+    /// by more than the cap). One pass over the keys.
+    pub fn clamp_ages(&mut self, before: u32, now: u32, far: bool) {
         for stamp in self.stamp.iter_mut() {
-            if all || now.wrapping_sub(*stamp) >= AGE_CAP {
-                *stamp = floor;
-            }
+            *stamp = if far {
+                now.wrapping_sub(AGE_CAP)
+            } else {
+                clamp_stamp(clamp_stamp(*stamp, before), now)
+            };
         }
+    }
+}
+
+/// `stamp`, or `at − AGE_CAP` if it is older than that at `at`.
+#[inline(always)]
+pub(crate) fn clamp_stamp(stamp: u32, at: u32) -> u32 {
+    if at.wrapping_sub(stamp) >= AGE_CAP {
+        at.wrapping_sub(AGE_CAP)
+    } else {
+        stamp
     }
 }

@@ -89,6 +89,7 @@ impl<const B: usize> FingerFrame<B> {
     }
 
     /// Sets or clears one output.
+    #[inline]
     pub fn set(&mut self, board: u8, bit: u8, on: bool) {
         let mask = bit16(bit);
         self.touched |= bit16(board);

@@ -140,62 +140,72 @@ impl HeldNotes for NoteTable {
 /// Up to `N` held notes, 3 bytes each, for MCUs with little RAM.
 #[derive(Clone, Debug)]
 pub struct NotePool<const N: usize> {
-    /// `channel << 7 | note` of each held note, with [`SUSTAINED`] set if only the pedal
-    /// holds it.
-    notes: [u16; N],
-    /// The key each one holds.
+    /// The note of each held note…
+    notes: [u8; N],
+    /// … its channel, with [`SUSTAINED`] set if only the pedal holds it (a byte each, so that
+    /// a search compares bytes: no shifts or 16-bit compares on an 8-bit MCU)…
+    channels: [u8; N],
+    /// … and the key it holds.
     keys: [u8; N],
     len: u8,
 }
 
-/// The tag bit of a note that only the sustain pedal holds.
-const SUSTAINED: u16 = 1 << 15;
+/// The channel byte's bit of a note that only the sustain pedal holds.
+const SUSTAINED: u8 = 0x80;
 
 impl<const N: usize> NotePool<N> {
+    #[inline]
     fn find(&self, channel: Channel, note: Note) -> Option<usize> {
-        let tag = (channel.get() as u16) << 7 | note.get() as u16;
-        self.notes[..self.len as usize]
-            .iter()
-            .position(|&t| t & !SUSTAINED == tag)
+        let (channel, note) = (channel.get(), note.get());
+        (0..self.len as usize)
+            .find(|&i| self.notes[i] == note && self.channels[i] & !SUSTAINED == channel)
     }
 
-    fn retain(&mut self, mut keep: impl FnMut(u16, u8) -> bool) {
+    fn retain(&mut self, mut keep: impl FnMut(u8, u8) -> bool) {
         let mut i = 0;
         while i < self.len as usize {
-            if keep(self.notes[i], self.keys[i]) {
+            if keep(self.channels[i], self.keys[i]) {
                 i += 1;
             } else {
-                let last = self.len as usize - 1;
-                self.notes[i] = self.notes[last];
-                self.keys[i] = self.keys[last];
-                self.len -= 1;
+                self.remove_at(i);
             }
         }
+    }
+
+    /// Forgets the note at `i`: the last one takes its place.
+    fn remove_at(&mut self, i: usize) {
+        let last = self.len as usize - 1;
+        self.notes[i] = self.notes[last];
+        self.channels[i] = self.channels[last];
+        self.keys[i] = self.keys[last];
+        self.len -= 1;
     }
 }
 
 impl<const N: usize> HeldNotes for NotePool<N> {
     const EMPTY: Self = Self {
         notes: [0; N],
+        channels: [0; N],
         keys: [0; N],
         len: 0,
     };
 
     fn contains(&self, channel: Channel, note: Note) -> bool {
         self.find(channel, note)
-            .is_some_and(|i| self.notes[i] & SUSTAINED == 0)
+            .is_some_and(|i| self.channels[i] & SUSTAINED == 0)
     }
 
     fn insert(&mut self, channel: Channel, note: Note, key: u8) -> bool {
         if let Some(i) = self.find(channel, note) {
-            self.notes[i] &= !SUSTAINED;
+            self.channels[i] &= !SUSTAINED;
             return true;
         }
         let i = self.len as usize;
         if i >= N || i >= u8::MAX as usize {
             return false;
         }
-        self.notes[i] = (channel.get() as u16) << 7 | note.get() as u16;
+        self.notes[i] = note.get();
+        self.channels[i] = channel.get();
         self.keys[i] = key;
         self.len += 1;
         true
@@ -205,18 +215,15 @@ impl<const N: usize> HeldNotes for NotePool<N> {
         let Some(i) = self.find(channel, note) else {
             return false;
         };
-        let was = self.notes[i] & SUSTAINED == 0;
-        let last = self.len as usize - 1;
-        self.notes[i] = self.notes[last];
-        self.keys[i] = self.keys[last];
-        self.len -= 1;
+        let was = self.channels[i] & SUSTAINED == 0;
+        self.remove_at(i);
         was
     }
 
     fn sustain(&mut self, channel: Channel, note: Note) -> bool {
         match self.find(channel, note) {
-            Some(i) if self.notes[i] & SUSTAINED == 0 => {
-                self.notes[i] |= SUSTAINED;
+            Some(i) if self.channels[i] & SUSTAINED == 0 => {
+                self.channels[i] |= SUSTAINED;
                 true
             }
             _ => false,
@@ -224,19 +231,19 @@ impl<const N: usize> HeldNotes for NotePool<N> {
     }
 
     fn release_sustained(&mut self, channel: Channel) {
-        self.retain(|tag, _| tag & SUSTAINED == 0 || ((tag >> 7) & 0x0F) as u8 != channel.get());
+        self.retain(|c, _| c != channel.get() | SUSTAINED);
     }
 
     fn sustain_channel(&mut self, channel: Channel) {
-        for tag in &mut self.notes[..self.len as usize] {
-            if ((*tag >> 7) & 0x0F) as u8 == channel.get() {
-                *tag |= SUSTAINED;
+        for c in &mut self.channels[..self.len as usize] {
+            if *c & !SUSTAINED == channel.get() {
+                *c |= SUSTAINED;
             }
         }
     }
 
     fn remove_channel(&mut self, channel: Channel) {
-        self.retain(|tag, _| ((tag >> 7) & 0x0F) as u8 != channel.get());
+        self.retain(|c, _| c & !SUSTAINED != channel.get());
     }
 
     fn remove_key(&mut self, key: u8, _range: KeyRange, _policy: OutOfRange) {
@@ -244,10 +251,8 @@ impl<const N: usize> HeldNotes for NotePool<N> {
     }
 
     fn holds_key(&self, key: u8, _range: KeyRange, _policy: OutOfRange, sustained: bool) -> bool {
-        self.keys[..self.len as usize]
-            .iter()
-            .zip(&self.notes)
-            .any(|(&k, &t)| k == key && (sustained || t & SUSTAINED == 0))
+        (0..self.len as usize)
+            .any(|i| self.keys[i] == key && (sustained || self.channels[i] & SUSTAINED == 0))
     }
 
     fn clear(&mut self) {

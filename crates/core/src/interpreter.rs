@@ -2,7 +2,9 @@
 
 use crate::config::{Config, ConfigError, ConfigSource, DutyLimit, GuardConfig, Overlap, Thesis};
 use crate::decoder::{Counters, Decoder};
-use crate::fingers::{Fingers, AGE_CAP, DOWN, FOLDED, LATE, PENDING, RELEASE_AFTER, RELEASING};
+use crate::fingers::{
+    clamp_stamp, Fingers, AGE_CAP, DOWN, FOLDED, LATE, PENDING, RELEASE_AFTER, RELEASING,
+};
 use crate::frame::{FingerFrame, FlushError};
 use crate::held::{HeldNotes, NoteTable};
 use crate::keymap::KeyOf;
@@ -697,12 +699,12 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     #[cold]
     #[inline(never)]
     fn passed_low32(&mut self, before: u32) {
-        let epoch = self.epoch;
-        if self.clock < before {
-            self.epoch = epoch.wrapping_add(1);
+        let now = self.clock;
+        if now < before {
+            self.epoch = self.epoch.wrapping_add(1);
         }
-        let before = Instant::from_micros(((epoch as u64) << 32) | before as u64);
-        self.clamp_ages(before, self.instant());
+        // Less than 2³¹ µs (the cap): the jump in 32 bits.
+        self.clamp_ages_low32(before, now, now.wrapping_sub(before));
     }
 
     /// Keeps per-key ages from wrapping, when the clock moved from `before` to `now` past a
@@ -710,27 +712,34 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     #[cold]
     #[inline(never)]
     fn clamp_ages(&mut self, before: Instant, now: Instant) {
+        // In 32 bits from here: a jump of at least the cap reaches everything.
+        let jump = now.saturating_since(before);
+        let jump = if jump >= AGE_CAP as u64 {
+            u32::MAX
+        } else {
+            jump as u32
+        };
+        self.clamp_ages_low32(before.low32(), now.low32(), jump);
+    }
+
+    /// [`clamp_ages`](Self::clamp_ages) with the low 32 bits of the times, and the jump
+    /// saturated at `u32::MAX` (kept apart, so that an MCU fed the `*_low32` methods has no
+    /// 64-bit arithmetic here).
+    #[cold]
+    #[inline(never)]
+    fn clamp_ages_low32(&mut self, before: u32, now: u32, jump: u32) {
         // Ages are clamped well before they could wrap: whenever the clock jumps by at least
         // the cap (everything is old), and at least once every cap/2 of clock time (when it
         // passes a multiple of 2³⁰ µs). Ages can be up to 1.5 × cap just before a clamp, so a
         // jump of up to a cap on top of that would wrap 32 bits: clamp at the time before the
         // jump first.
-        let jump = now.saturating_since(before);
-        let far = jump >= AGE_CAP as u64;
-        // In 32 bits from here: a jump of at least the cap reaches everything.
-        let jump = if far { u32::MAX } else { jump as u32 };
-        let (before, now) = (before.low32(), now.low32());
-        if far {
-            self.fingers.clamp_ages(now, true);
-            self.last_input = now.wrapping_sub(AGE_CAP);
+        let far = jump >= AGE_CAP;
+        self.fingers.clamp_ages(before, now, far);
+        self.last_input = if far {
+            now.wrapping_sub(AGE_CAP)
         } else {
-            for at in [before, now] {
-                self.fingers.clamp_ages(at, false);
-                if at.wrapping_sub(self.last_input) >= AGE_CAP {
-                    self.last_input = at.wrapping_sub(AGE_CAP);
-                }
-            }
-        }
+            clamp_stamp(clamp_stamp(self.last_input, before), now)
+        };
         // The kept deadlines: one the jump reached is passed, at `now`.
         self.due = self.due.reach(before, jump, now);
         self.wake = self.wake.reach(before, jump, now);
