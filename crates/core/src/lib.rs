@@ -54,7 +54,7 @@
 //! | **`Interpreter<4, 61, NotePool<32>, Thesis>` without `duty-limit` and `stats`: the ATmega16 build** | **544** |
 //! | **[`Interpreter`] with [`NoteTable`], the duty limit and the statistics: the host's** | **1232** |
 //!
-//! AVR has no padding, so the ATmega16 figure is a few bytes lower (534). The [`Decoder`]
+//! AVR has no padding, so the ATmega16 figure is a few bytes lower (536). The [`Decoder`]
 //! alone takes 12 bytes (28 with `stats`).
 //!
 //! Time is passed in as 64-bit [`Instant`]s, but the interpreter keeps its deadlines and the

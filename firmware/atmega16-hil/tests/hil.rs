@@ -505,6 +505,8 @@ fn figures() {
     let mut real_latency = Vec::new();
     let mut ahead_bits = Vec::new();
     let mut began_ahead = Vec::new();
+    // Each byte's share (main loop and receive interrupt), by its place in the message.
+    let mut per_byte: Vec<Vec<u64>> = Vec::new();
     let msgs: [&[u8]; 6] = [
         &[0x90, 60, 100],
         &[0x90, 64, 100],
@@ -517,8 +519,10 @@ fn figures() {
     let bit_cycles = F_CPU as f64 / twi_hz() as f64;
     for m in msgs {
         let log_from = hil.bus.borrow().log.len();
-        let (mut work, mut twi) = (0u64, 0u64);
+        let mut twi = 0u64;
+        // Runs for `us`; returns the cycles of work seen meanwhile.
         let mut run_for = |hil: &mut Hil, us: u64| {
+            let mut work = 0;
             let end = hil.cycles.get() + us * 8;
             while hil.cycles.get() < end {
                 let n = hil.step();
@@ -529,14 +533,21 @@ fn figures() {
                     work += n;
                 }
             }
+            work
         };
         let mut last_put = 0;
-        for &b in m {
+        let mut shares = Vec::new();
+        for (i, &b) in m.iter().enumerate() {
             last_put = hil.cycles.get();
             hil.put(b);
-            run_for(&mut hil, SIM_BYTE_US);
+            let mut share = run_for(&mut hil, SIM_BYTE_US);
+            if i + 1 == m.len() {
+                share += run_for(&mut hil, 3_000);
+            }
+            shares.push(share);
         }
-        run_for(&mut hil, 3_000);
+        let work: u64 = shares.iter().sum();
+        per_byte.push(shares);
         interp.push(work);
         twi_cycles.push(twi);
         // From the end of the last byte's stop bit (when simavr raises receive-complete) to
@@ -606,6 +617,9 @@ fn figures() {
         avg(&interp),
         avg(&interp) / 8.0
     );
+    for (m, shares) in msgs.iter().zip(&per_byte) {
+        println!("  {m:02x?}: {shares:?} cycles, byte by byte");
+    }
     println!(
         "CPU cycles in the TWI interrupt per board write: {:?}, mean {:.0} ({:.0} µs)",
         twi_cycles,

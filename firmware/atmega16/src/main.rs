@@ -63,7 +63,7 @@ fn init_board(board: u8, outputs: u16) {
     }
 }
 
-/// The interpreter (560 bytes) lives in a static built at compile time: built at run time it
+/// The interpreter (536 bytes) lives in a static built at compile time: built at run time it
 /// would pass through the stack, twice its size in 1 KB of SRAM. With the configuration a
 /// constant ([`Thesis`]) its initial state is all zero bits, so it sits in `.bss`: no flash for
 /// an initial copy.
