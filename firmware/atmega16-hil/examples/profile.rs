@@ -2,7 +2,8 @@
 //! MIDI flood (the HIL test's) with four boards that acknowledge everything, samples the
 //! program counter at every instruction and prints the cycles spent in each function (self
 //! time, by `avr-nm`'s symbols), largest first: while the firmware works (its probe pins:
-//! PD4 the main loop on a byte or a timer, PD2 the receive interrupt, PD5 the TWI interrupt),
+//! PD4 the main loop on a byte or a timer, PD2 the receive interrupt, PD5 the TWI interrupt,
+//! and the interrupt handlers' register saves and restores outside their pins),
 //! and in all (the main loop polls for work when idle).
 //!
 //! ```sh
@@ -85,7 +86,13 @@ fn main() {
                 symbols.len()
             };
             per_fn[f] += n;
-            if sim.get_digital_pin('D', 4)
+            // Busy: a probe pin is high, or an interrupt handler saves or restores its
+            // registers (before its pin goes high, after it goes low) or its vector jumps.
+            // (0x54: the end of the ATmega16's 21 vectors, 4 bytes each.)
+            let in_handler =
+                pc < 0x54 || symbols.get(f).is_some_and(|s| s.2.starts_with("__vector_"));
+            if in_handler
+                || sim.get_digital_pin('D', 4)
                 || sim.get_digital_pin('D', 2)
                 || sim.get_digital_pin('D', 5)
             {

@@ -485,6 +485,51 @@ fn elf_section_size(path: &std::path::Path, name: &str) -> u64 {
         .map_or(0, |i| u32_at(header(i) + 0x14) as u64)
 }
 
+/// The cycles of each run of interrupt handler `vector` that its probe pin (PD`pin`) does not
+/// cover: the interrupt's response (4 cycles) and the vector's `jmp` (3), the registers saved
+/// before the pin goes high, and those restored after it goes low with the `reti`. Read from
+/// the handler's code (`avr-objdump`), so that the figures count whole interrupts.
+fn unprobed_cycles(elf: &std::path::Path, vector: &str, pin: u8) -> u64 {
+    let out = std::process::Command::new("avr-objdump")
+        .arg("-d")
+        .arg(elf)
+        .output()
+        .expect("avr-objdump (Debian's binutils-avr)");
+    let text = String::from_utf8_lossy(&out.stdout);
+    let body: Vec<String> = text
+        .lines()
+        .skip_while(|l| !l.ends_with(&format!("<{vector}>:")))
+        .skip(1)
+        .take_while(|l| !l.trim().is_empty())
+        .map(|l| l.splitn(3, '\t').nth(2).unwrap_or("").replace('\t', " "))
+        .collect();
+    let cycles = |ins: &[String]| -> u64 {
+        ins.iter()
+            .map(|i| match i.split_whitespace().next().unwrap_or("") {
+                "push" | "pop" | "cbi" => 2,
+                "in" | "out" | "eor" => 1,
+                "reti" => 4,
+                other => panic!("unexpected {other:?} in {vector}'s entry or exit"),
+            })
+            .sum()
+    };
+    let (sbi, cbi) = (format!("sbi 0x12, {pin}"), format!("cbi 0x12, {pin}"));
+    let on = body
+        .iter()
+        .position(|i| i.starts_with(&sbi))
+        .unwrap_or_else(|| panic!("{vector} raises PD{pin}"));
+    let off = body
+        .iter()
+        .rposition(|i| i.starts_with(&cbi))
+        .unwrap_or_else(|| panic!("{vector} lowers PD{pin}"));
+    let reti = off
+        + body[off..]
+            .iter()
+            .position(|i| i.starts_with("reti"))
+            .unwrap_or_else(|| panic!("{vector} returns"));
+    4 + 3 + cycles(&body[..on]) + cycles(&body[off..=reti])
+}
+
 /// Figures for the README: run with `--nocapture`.
 #[test]
 fn figures() {
@@ -493,6 +538,9 @@ fn figures() {
     let section = |name: &str| elf_section_size(&elf, name);
     let (flash_text, data, bss) = (section(".text"), section(".data"), section(".bss"));
 
+    // USART_RXC and TWI, PD2 and PD5.
+    let rx_unprobed = unprobed_cycles(&elf, "__vector_11", 2);
+    let twi_unprobed = unprobed_cycles(&elf, "__vector_17", 5);
     let mut hil = Hil::new();
     hil.boot();
     // Cycles per note message: instructions run while the firmware works on it (PD4: decode,
@@ -520,14 +568,21 @@ fn figures() {
     for m in msgs {
         let log_from = hil.bus.borrow().log.len();
         let mut twi = 0u64;
+        let mut in_twi = false;
         // Runs for `us`; returns the cycles of work seen meanwhile.
         let mut run_for = |hil: &mut Hil, us: u64| {
             let mut work = 0;
             let end = hil.cycles.get() + us * 8;
             while hil.cycles.get() < end {
                 let n = hil.step();
-                // The TWI interrupt can preempt the main loop's work: counted as the write's.
-                if hil.pin('D', 5) {
+                // The TWI interrupt can preempt the main loop's work: counted as the write's,
+                // each run of it whole.
+                let twi_pin = hil.pin('D', 5);
+                if twi_pin && !in_twi {
+                    twi += twi_unprobed;
+                }
+                in_twi = twi_pin;
+                if twi_pin {
                     twi += n;
                 } else if hil.pin('D', 4) || hil.pin('D', 2) {
                     work += n;
@@ -544,7 +599,8 @@ fn figures() {
             if i + 1 == m.len() {
                 share += run_for(&mut hil, 3_000);
             }
-            shares.push(share);
+            // The byte's receive interrupt, whole.
+            shares.push(share + rx_unprobed);
         }
         let work: u64 = shares.iter().sum();
         per_byte.push(shares);
@@ -616,6 +672,9 @@ fn figures() {
         interp,
         avg(&interp),
         avg(&interp) / 8.0
+    );
+    println!(
+        "  (each byte's receive interrupt whole: its probed body and {rx_unprobed} cycles of entry and exit)"
     );
     for (m, shares) in msgs.iter().zip(&per_byte) {
         println!("  {m:02x?}: {shares:?} cycles, byte by byte");

@@ -123,8 +123,8 @@ fn main() -> ! {
     loop {
         avr_device::asm::wdr();
         twi::check();
+        // (The work probe pin goes high inside `pop`, before the byte leaves the ring.)
         if let Some((byte, stamp)) = midi::pop() {
-            probe::work(true);
             let at = clock::since(stamp);
             // The guard's timers that fall before this byte first, each at its own time,
             // then the byte at its arrival time: the same steps, at the same times, as

@@ -51,7 +51,8 @@ pub fn start(u: USART) {
     u.ucsrb.write(|w| unsafe { w.bits(RXCIE | RXEN | TXEN) });
 }
 
-/// The next received byte, if any, with the low 16 bits of the µs clock when it arrived.
+/// The next received byte, if any, with the low 16 bits of the µs clock when it arrived. With
+/// one, the work probe pin is high (the caller lowers it when done).
 #[inline(always)]
 pub fn pop() -> Option<(u8, u16)> {
     // SAFETY: single producer (the handler writes HEAD after the byte), single consumer.
@@ -60,6 +61,9 @@ pub fn pop() -> Option<(u8, u16)> {
         if tail == read_volatile(addr_of!(RX_HEAD)) {
             return None;
         }
+        // A byte: the main loop's work on it starts here (its probe pin, PD4, goes high
+        // before the byte leaves the ring).
+        crate::probe::work(true);
         let i = (tail & (RX_N - 1)) as usize;
         let b = read_volatile(addr_of!(RX_BUF[i]));
         let at = read_volatile(addr_of!(RX_AT[i]));
