@@ -23,7 +23,7 @@ static mut RX_AT: [u16; RX_N as usize] = [0; RX_N as usize];
 static mut RX_HEAD: u8 = 0;
 /// Written by the main loop only.
 static mut RX_TAIL: u8 = 0;
-/// Bytes lost because the ring was full.
+/// Bytes lost because the ring was full (wrapping; for a debugger).
 static mut RX_LOST: u8 = 0;
 
 // Thru: touched only by the two interrupt handlers, which never nest.
@@ -31,7 +31,6 @@ static mut TX_BUF: [u8; TX_N as usize] = [0; TX_N as usize];
 static mut TX_HEAD: u8 = 0;
 static mut TX_TAIL: u8 = 0;
 
-const RXC: u8 = 1 << 7;
 const UDRE: u8 = 1 << 5;
 const RXCIE: u8 = 1 << 7;
 const UDRIE: u8 = 1 << 5;
@@ -78,32 +77,33 @@ fn USART_RXC() {
     // The arrival time first: the receive-complete flag rose a few cycles ago.
     let at = crate::clock::ticks16_raw();
     let u = usart();
-    while u.ucsra.read().bits() & RXC != 0 {
-        let b = u.udr.read().bits();
-        // SAFETY: see the statics.
-        unsafe {
-            let head = read_volatile(addr_of!(RX_HEAD));
-            let next = (head + 1) % RX_N;
-            if next == read_volatile(addr_of!(RX_TAIL)) {
-                let lost = read_volatile(addr_of!(RX_LOST));
-                write_volatile(addr_of_mut!(RX_LOST), lost.saturating_add(1));
-            } else {
-                let i = (head & (RX_N - 1)) as usize;
-                write_volatile(addr_of_mut!(RX_BUF[i]), b);
-                write_volatile(addr_of_mut!(RX_AT[i]), at);
-                write_volatile(addr_of_mut!(RX_HEAD), next);
+    // One byte each time: a second one waiting in the UART raises the interrupt again at
+    // once (fewer registers to save for every byte than a loop).
+    let b = u.udr.read().bits();
+    // SAFETY: see the statics.
+    unsafe {
+        // Thru: straight out if nothing is queued and the data register is free.
+        let tx_head = TX_HEAD;
+        if tx_head == TX_TAIL && u.ucsra.read().bits() & UDRE != 0 {
+            u.udr.write(|w| w.bits(b));
+        } else {
+            let next = (tx_head + 1) % TX_N;
+            if next != TX_TAIL {
+                TX_BUF[(tx_head & (TX_N - 1)) as usize] = b;
+                TX_HEAD = next;
             }
-            // Thru: straight out if nothing is queued and the data register is free.
-            if TX_HEAD == TX_TAIL && u.ucsra.read().bits() & UDRE != 0 {
-                u.udr.write(|w| w.bits(b));
-            } else {
-                let next = (TX_HEAD + 1) % TX_N;
-                if next != TX_TAIL {
-                    TX_BUF[(TX_HEAD & (TX_N - 1)) as usize] = b;
-                    TX_HEAD = next;
-                }
-                u.ucsrb.modify(|r, w| w.bits(r.bits() | UDRIE));
-            }
+            u.ucsrb.modify(|r, w| w.bits(r.bits() | UDRIE));
+        }
+        let head = read_volatile(addr_of!(RX_HEAD));
+        let next = (head + 1) % RX_N;
+        if next == read_volatile(addr_of!(RX_TAIL)) {
+            let lost = read_volatile(addr_of!(RX_LOST));
+            write_volatile(addr_of_mut!(RX_LOST), lost.wrapping_add(1));
+        } else {
+            let i = (head & (RX_N - 1)) as usize;
+            write_volatile(addr_of_mut!(RX_BUF[i]), b);
+            write_volatile(addr_of_mut!(RX_AT[i]), at);
+            write_volatile(addr_of_mut!(RX_HEAD), next);
         }
     }
     crate::probe::isr_exit();

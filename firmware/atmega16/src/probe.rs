@@ -92,9 +92,11 @@ pub fn isr_enter() {
 pub fn isr_exit() {
     set(ISR_PIN, false)
 }
+/// Called with a constant `on`, so that it is one `sbi` or `cbi` (atomic: no interrupt can
+/// come between a read and a write of PORTD).
 #[inline(always)]
 pub fn work(on: bool) {
-    avr_device::interrupt::free(|_| set(WORK_PIN, on))
+    set(WORK_PIN, on)
 }
 #[inline(always)]
 pub fn twi_enter() {
