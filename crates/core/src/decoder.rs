@@ -240,8 +240,11 @@ impl<const SYSEX: usize> Decoder<SYSEX> {
         out
     }
 
+    /// Decodes `byte`, handing each message it completes to `emit` (at most two: a System
+    /// Exclusive message ended by a status byte, then that byte's own SysExStart or Tune
+    /// Request).
     #[inline(always)]
-    fn step<F: FnMut(Message)>(&mut self, byte: u8, emit: &mut F) {
+    pub(crate) fn step<F: FnMut(Message)>(&mut self, byte: u8, emit: &mut F) {
         self.count(|c| &mut c.bytes);
         if byte < 0x80 {
             self.data_byte(byte, emit);

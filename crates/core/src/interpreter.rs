@@ -393,7 +393,13 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         let mut changed = self.run_if_due(sink);
         let now = self.clock;
         self.last_input = now;
-        for message in self.decoder.push(byte) {
+        // A byte completes at most two messages, and only when the first is a System
+        // Exclusive message ended by a status byte; the second is then that byte's SysExStart
+        // or Tune Request. None of those three acts on the robot, so only the last message
+        // is kept and applied: one slot in registers, not a queue of two.
+        let mut last = None;
+        self.decoder.step(byte, &mut |m| last = Some(m));
+        if let Some(message) = last {
             changed = true;
             self.apply(message, now, sink);
         }

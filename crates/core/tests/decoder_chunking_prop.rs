@@ -78,6 +78,25 @@ proptest! {
         prop_assert_eq!(messages.iter().filter(|m| m.is_realtime()).count(), realtime);
     }
 
+    /// The interpreter applies only the last message a byte completes: that is right only if
+    /// a byte that completes two always completes a System Exclusive message first and then
+    /// a SysExStart or Tune Request (none of them acts on the robot).
+    #[test]
+    fn a_byte_completes_two_messages_only_after_a_system_exclusive(bytes in byte_stream(200)) {
+        let mut d = Decoder::<0>::new();
+        for &b in &bytes {
+            let out: Vec<Message> = d.push(b).collect();
+            prop_assert!(out.len() <= 2, "{:#04x}: {:?}", b, out);
+            if let [first, second] = out[..] {
+                prop_assert!(matches!(first, Message::SysEx { .. }), "{:#04x}: {:?}", b, out);
+                prop_assert!(
+                    matches!(second, Message::SysExStart | Message::TuneRequest),
+                    "{:#04x}: {:?}", b, out
+                );
+            }
+        }
+    }
+
     #[test]
     fn the_decoder_agrees_with_a_model_of_the_spec(bytes in byte_stream(200)) {
         let (messages, counters, sysex) = byte_by_byte(&bytes);
