@@ -46,7 +46,7 @@ impl FingerBoards for Boards {
 
     #[inline(always)]
     fn write_board(&mut self, board: BoardId, outputs: u16) -> Result<(), Infallible> {
-        if twi::failed() & (1 << (board.index & 3)) == 0 {
+        if twi::failed() & twi::board_bit(board.index) == 0 {
             twi::push(board.index, twi::OUTPUTS, outputs);
         }
         Ok(())
@@ -161,7 +161,7 @@ fn main() -> ! {
         if failed != 0 && reached(now, retry_at) && twi::idle() {
             // Whatever a board holds after coming back, it gets the frame's outputs again.
             for i in 0..4u8 {
-                if failed & (1 << i) != 0 {
+                if failed & twi::board_bit(i) != 0 {
                     twi::clear_failed(i);
                     init_board(i, robot.frame().outputs(i as usize));
                 }

@@ -174,6 +174,14 @@ fn enable() {
     control(TWEN);
 }
 
+/// Board `b`'s bit (`b` 0..=3) in [`failed`]'s mask: `1 << b` is a loop of `b` shifts on
+/// the AVR.
+#[inline(always)]
+pub fn board_bit(b: u8) -> u8 {
+    const BITS: [u8; 4] = [1, 2, 4, 8];
+    BITS[(b & 3) as usize]
+}
+
 /// Boards set aside after failing [`ATTEMPTS`] times (bit `i` = board `i`).
 #[inline(always)]
 pub fn failed() -> u8 {
@@ -183,7 +191,7 @@ pub fn failed() -> u8 {
 /// Takes `board` back: its writes go out again.
 pub fn clear_failed(board: u8) {
     avr_device::interrupt::free(|_| unsafe {
-        write_volatile(addr_of_mut!(FAILED), failed() & !(1 << board));
+        write_volatile(addr_of_mut!(FAILED), failed() & !board_bit(board));
     });
 }
 
@@ -263,7 +271,7 @@ pub fn ahead(board: Option<u8>) {
         match (waiting(), board) {
             (Some(tail), Some(b)) if Q_JOB[tail] & 3 == b => {}
             (Some(_), _) => abort(),
-            (None, Some(b)) if idle() && FAILED & (1 << b) == 0 => {
+            (None, Some(b)) if idle() && FAILED & board_bit(b) == 0 => {
                 let head = Q_HEAD;
                 Q_JOB[(head & (Q - 1)) as usize] = b | OUTPUTS | WAITING;
                 Q_HEAD = (head + 1) % Q;
@@ -294,8 +302,7 @@ unsafe fn done(t: &avr_device::atmega16::twi::RegisterBlock) {
     Q_TAIL = next;
     TRIES = 0;
     let job = Q_JOB[(next & (Q - 1)) as usize];
-    if next != read_volatile(addr_of!(Q_HEAD)) && FAILED & (1 << (job & 3)) == 0 && job & ABORT == 0
-    {
+    if next != read_volatile(addr_of!(Q_HEAD)) && FAILED & board_bit(job) == 0 && job & ABORT == 0 {
         STEP = 1;
         STEP_AT = clock::ticks16_raw();
         t.twcr
@@ -313,8 +320,7 @@ fn begin() {
         let head = read_volatile(addr_of!(Q_HEAD));
         let mut tail = Q_TAIL;
         while tail != head
-            && (FAILED & (1 << (Q_JOB[tail as usize] & 3)) != 0
-                || Q_JOB[tail as usize] & ABORT != 0)
+            && (FAILED & board_bit(Q_JOB[tail as usize]) != 0 || Q_JOB[tail as usize] & ABORT != 0)
         {
             tail = (tail + 1) % Q;
         }
@@ -356,7 +362,7 @@ fn fail() {
             restart();
             return;
         }
-        FAILED |= 1 << (Q_JOB[Q_TAIL as usize] & 3);
+        FAILED |= board_bit(Q_JOB[Q_TAIL as usize]);
         // `begin` skips the board's queued writes.
         begin();
     }
