@@ -172,10 +172,12 @@ fn main() -> ! {
             probe::publish();
             publish_at = now.wrapping_add(250_000);
             // orch-core's 32-bit time needs a call at least every 2³⁰ µs (17.8 minutes): a
-            // silent line with no key down makes none, so the clock is shown to it here. (No
-            // timer is due: they ran above.)
-            tick(robot, now);
-            deadline = robot.next_deadline_low32();
+            // silent line with no key down makes none, so the clock is shown to it here, when
+            // no timer is due (those run above, one a turn, each at its own time).
+            if deadline.is_none_or(|d| !reached(now, d)) {
+                tick(robot, now);
+                deadline = robot.next_deadline_low32();
+            }
         }
     }
 }
