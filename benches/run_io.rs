@@ -14,6 +14,9 @@
 //!
 //! `cargo bench --bench run_io` (or `bash scripts/bench-run.sh`). Not a test: it prints.
 
+#[path = "../tests/support/mod.rs"]
+mod support;
+
 use std::io::{BufRead, BufReader, Write};
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -25,25 +28,6 @@ const ORCH: &str = env!("CARGO_BIN_EXE_orch");
 const WIRE_BYTE: Duration = Duration::from_micros(320);
 /// DIN's note messages a second without running status.
 const DIN_MESSAGES: f64 = 31_250.0 / 10.0 / 3.0;
-
-/// A pseudo-terminal pair: the master and the slave's path, raw.
-fn pty_pair() -> (std::fs::File, String) {
-    use nix::fcntl::OFlag;
-    use std::os::fd::{FromRawFd, IntoRawFd};
-    let master =
-        nix::pty::posix_openpt(OFlag::O_RDWR | OFlag::O_NOCTTY | OFlag::O_CLOEXEC).unwrap();
-    nix::pty::grantpt(&master).unwrap();
-    nix::pty::unlockpt(&master).unwrap();
-    let path = nix::pty::ptsname_r(&master).unwrap();
-    let mut t = nix::sys::termios::tcgetattr(&master).unwrap();
-    nix::sys::termios::cfmakeraw(&mut t);
-    nix::sys::termios::tcsetattr(&master, nix::sys::termios::SetArg::TCSANOW, &t).unwrap();
-    // SAFETY: the descriptor is the master's own, handed over.
-    (
-        unsafe { std::fs::File::from_raw_fd(master.into_raw_fd()) },
-        path,
-    )
-}
 
 /// `orch run` reading the pty; returns it once it says it reads, with its stderr collected.
 fn start(path: &str, json: bool) -> (Child, Arc<Mutex<String>>) {
@@ -159,7 +143,7 @@ fn percentiles(mut v: Vec<f64>) -> (f64, f64, f64) {
 
 /// Latency of every board write: byte into the pty → its JSON line read.
 fn latency(loaded: bool) -> (usize, f64, f64, f64) {
-    let (mut master, path) = pty_pair();
+    let (mut master, path) = support::pty_master(true);
     let (mut child, stderr) = start(&path, true);
     let out = child.stdout.take().unwrap();
     let lines: Arc<Mutex<Vec<(Instant, u64)>>> = Arc::default();
@@ -224,7 +208,7 @@ fn latency(loaded: bool) -> (usize, f64, f64, f64) {
 /// Writes `messages` note messages at `rate` a second into `orch run`; returns the messages
 /// orch's decoder counted and the rate the writer achieved.
 fn rate(rate: f64, messages: usize) -> (u64, u64, f64) {
-    let (mut master, path) = pty_pair();
+    let (mut master, path) = support::pty_master(true);
     let (mut child, stderr) = start(&path, false);
     let bytes = notes(messages);
     let took = on_a_writer_thread(move || {

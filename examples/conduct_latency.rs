@@ -21,6 +21,9 @@
 //!
 //! Prints the median, 99th percentile and largest latency over the samples (40 by default).
 
+#[path = "../tests/support/mod.rs"]
+mod support;
+
 use std::net::UdpSocket;
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
@@ -35,23 +38,6 @@ const BEAT_MS: u64 = 250;
 /// would always meet the same phase of its wake).
 const AHEAD_US: u64 = 15_000;
 const SPREAD_US: u64 = 10_000;
-
-/// A Standard MIDI File: `beats` quarter notes at 240 BPM, one note each, half a beat long.
-fn piece(beats: u32) -> Vec<u8> {
-    let mut trk = vec![0x00, 0xFF, 0x51, 0x03];
-    trk.extend_from_slice(&(BEAT_MS as u32 * 1000).to_be_bytes()[1..]);
-    for i in 0..beats {
-        let n = 48 + (i % 24) as u8;
-        let delta: &[u8] = if i == 0 { &[0x00] } else { &[0x81, 0x70] };
-        trk.extend_from_slice(delta);
-        trk.extend_from_slice(&[0x90, n, 100, 0x81, 0x70, 0x80, n, 0]);
-    }
-    trk.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
-    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
-    smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
-    smf.extend_from_slice(&trk);
-    smf
-}
 
 /// A free UDP port on 127.0.0.1.
 fn free_port() -> u16 {
@@ -118,7 +104,11 @@ fn main() {
     std::fs::create_dir_all(&dir).expect("a scratch folder");
     let file = dir.join("quarters-240.mid");
     // Each sample takes about six beats; room for all of them, twice over.
-    std::fs::write(&file, piece(samples as u32 * 12 + 40)).expect("the piece written");
+    std::fs::write(
+        &file,
+        support::quarters_smf(samples as u32 * 12 + 40, 60_000.0 / BEAT_MS as f64),
+    )
+    .expect("the piece written");
 
     let sink = UdpSocket::bind("127.0.0.1:0").expect("a UDP socket for the output");
     let out = sink.local_addr().expect("its address");

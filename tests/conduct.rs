@@ -1,6 +1,8 @@
 //! `orch conduct`: a baton video drawn by orch-baton's harness conducts a piece (on the
 //! virtual clock, in-process), and the command line with its sources (in real time).
 
+mod support;
+
 use std::io::Write;
 use std::process::{Command, Stdio};
 use std::sync::Arc;
@@ -12,26 +14,6 @@ use orch_perform::{
     perform, song_events, Action, Control, Cue, Follow, Follower, MidiRecording, ScoreBeats, Tempo,
 };
 use orch_seq::{Clock, Lateness, Song, VirtualClock};
-
-/// A Standard MIDI File: `beats` quarter notes at `bpm` (480 ticks a quarter), one note each,
-/// half a beat long.
-fn quarters_smf(beats: u32, bpm: f64) -> Vec<u8> {
-    let mut trk = Vec::new();
-    let upq = (60e6 / bpm).round() as u32;
-    trk.extend_from_slice(&[0x00, 0xFF, 0x51, 0x03]);
-    trk.extend_from_slice(&upq.to_be_bytes()[1..]);
-    for i in 0..beats {
-        let n = 48 + (i % 24) as u8;
-        let delta: &[u8] = if i == 0 { &[0x00] } else { &[0x81, 0x70] };
-        trk.extend_from_slice(delta);
-        trk.extend_from_slice(&[0x90, n, 100, 0x81, 0x70, 0x80, n, 0]);
-    }
-    trk.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
-    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
-    smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
-    smf.extend_from_slice(&trk);
-    smf
-}
 
 /// A clock whose waits deliver the video's frames falling inside them, each at its time
 /// (µs after the score's start: the video's time 0 is the score's, as `orch conduct` does).
@@ -80,7 +62,7 @@ struct Followed {
 }
 
 fn conduct_with_video(video: &Video, follow: Follow, poll_us: Option<u64>) -> Followed {
-    let song = Song::parse(&quarters_smf(24, 90.0)).unwrap();
+    let song = Song::parse(&support::quarters_smf(24, 90.0)).unwrap();
     let setup = orch::play::setup(&orch::robot::Robot::thesis(), true, Tempo::NORMAL);
     let control = Control::new();
     if let Some(us) = poll_us {
@@ -224,7 +206,7 @@ fn all_struck(stdout: &[u8], notes: u64) {
 fn midi_clock_on_stdin_sets_the_tempo() {
     // Eight quarters written at 60 BPM (8 s); the clock runs at 120: about 4 s.
     let file = scratch("clock.mid");
-    std::fs::write(&file, quarters_smf(8, 60.0)).unwrap();
+    std::fs::write(&file, support::quarters_smf(8, 60.0)).unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_orch"))
         .args([
             "conduct",
@@ -265,7 +247,7 @@ fn midi_clock_on_stdin_sets_the_tempo() {
 #[test]
 fn osc_tempo_over_udp_sets_the_tempo() {
     let file = scratch("osc.mid");
-    std::fs::write(&file, quarters_smf(8, 60.0)).unwrap();
+    std::fs::write(&file, support::quarters_smf(8, 60.0)).unwrap();
     let port = std::net::UdpSocket::bind("127.0.0.1:0")
         .unwrap()
         .local_addr()
@@ -297,7 +279,7 @@ fn osc_tempo_over_udp_sets_the_tempo() {
 #[test]
 fn bad_sources_exit_2() {
     let file = scratch("bad.mid");
-    std::fs::write(&file, quarters_smf(2, 60.0)).unwrap();
+    std::fs::write(&file, support::quarters_smf(2, 60.0)).unwrap();
     for source in [
         "nothing",
         "osc:notaport",

@@ -2,6 +2,8 @@
 //! objects instead of hardware (a pseudo-terminal for the UART, UDP on loopback, a pipe for
 //! standard input), against `orch interpret` fed the same bytes.
 
+mod support;
+
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::UdpSocket;
 use std::process::{Child, ChildStdout, Command, Stdio};
@@ -254,21 +256,6 @@ fn percentiles(mut v: Vec<f64>) -> (f64, f64, f64) {
     (at(0.5), at(0.99), v[v.len() - 1])
 }
 
-/// A pseudo-terminal pair: the master (the test's end of the wire) and the slave's path, in
-/// raw mode. No child inherits the master.
-fn pty_pair() -> (std::fs::File, String) {
-    use nix::fcntl::OFlag;
-    use std::os::fd::{FromRawFd, IntoRawFd};
-    let master =
-        nix::pty::posix_openpt(OFlag::O_RDWR | OFlag::O_NOCTTY | OFlag::O_CLOEXEC).unwrap();
-    nix::pty::grantpt(&master).unwrap();
-    nix::pty::unlockpt(&master).unwrap();
-    let path = nix::pty::ptsname_r(&master).unwrap();
-    // SAFETY: the descriptor is the master's own, handed over.
-    let file = unsafe { std::fs::File::from_raw_fd(master.into_raw_fd()) };
-    (file, path)
-}
-
 /// A robot whose guard decides nothing by time within a piece: a second note on a key joins
 /// it (`overlap = "hold"`), no rest before a re-strike, no shortest press. Its writes then
 /// follow from the bytes and their order alone, so a scheduling delay of a few ms on a busy
@@ -320,7 +307,7 @@ fn serial_pty_at_wire_pace_gives_what_interpret_gives() {
     ));
     assert!(bytes.len() > 500, "{}", bytes.len());
     let robot = timeless_robot();
-    let (mut master, path) = pty_pair();
+    let (mut master, path) = support::pty_master(false);
     let mut child = run_orch(
         &[
             "--in",
@@ -381,7 +368,7 @@ fn serial_pty_at_wire_pace_gives_what_interpret_gives() {
 fn a_serial_device_that_goes_away_releases_every_key_and_is_read_again_when_it_returns() {
     let link = std::env::temp_dir().join(format!("orch-run-serial-link-{}", std::process::id()));
     let _ = std::fs::remove_file(&link);
-    let (mut first, path) = pty_pair();
+    let (mut first, path) = support::pty_master(false);
     std::os::unix::fs::symlink(&path, &link).unwrap();
     let mut child = run_orch(
         &[
@@ -423,7 +410,7 @@ fn a_serial_device_that_goes_away_releases_every_key_and_is_read_again_when_it_r
     );
 
     // The device comes back at the same path.
-    let (mut second, path) = pty_pair();
+    let (mut second, path) = support::pty_master(false);
     std::fs::remove_file(&link).unwrap();
     std::os::unix::fs::symlink(&path, &link).unwrap();
     wait_for("is back", &stderr);

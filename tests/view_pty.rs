@@ -1,6 +1,8 @@
 //! The live view in a real pseudo-terminal (tmux): `orch play` shows the pressed keys and
 //! jumps to a bar typed; `orch conduct --source tap` follows the taps of the space bar.
 
+mod support;
+
 use std::process::{Command, Output};
 use std::thread::sleep;
 use std::time::{Duration, Instant};
@@ -26,24 +28,6 @@ fn chord_file() -> Vec<u8> {
     let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
     smf.extend_from_slice(&(track.len() as u32).to_be_bytes());
     smf.extend_from_slice(&track);
-    smf
-}
-
-/// A one-track SMF: `beats` quarter notes at `bpm` (480 ticks a quarter, 4/4), one note each,
-/// half a beat long.
-fn quarters_file(beats: u32, bpm: f64) -> Vec<u8> {
-    let mut trk = vec![0x00, 0xFF, 0x51, 0x03];
-    trk.extend_from_slice(&((60e6 / bpm).round() as u32).to_be_bytes()[1..]);
-    for i in 0..beats {
-        let n = 48 + (i % 24) as u8;
-        let delta: &[u8] = if i == 0 { &[0x00] } else { &[0x81, 0x70] };
-        trk.extend_from_slice(delta);
-        trk.extend_from_slice(&[0x90, n, 100, 0x81, 0x70, 0x80, n, 0]);
-    }
-    trk.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
-    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
-    smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
-    smf.extend_from_slice(&trk);
     smf
 }
 
@@ -164,7 +148,7 @@ fn live_view_under_a_pseudo_terminal_lights_the_pressed_keys_and_q_stops_it() {
 #[test]
 fn jump_keys_in_the_live_view_go_to_the_bar_typed_and_to_the_next() {
     // Eight bars of four quarters at 120 BPM: 16 s, a note on every beat.
-    let file = scratch("bars.mid", &quarters_file(32, 120.0));
+    let file = scratch("bars.mid", &support::quarters_smf(32, 120.0));
     let tmux = Tmux::start(
         "jump",
         &format!(
@@ -201,7 +185,7 @@ fn jump_keys_in_the_live_view_go_to_the_bar_typed_and_to_the_next() {
 #[test]
 fn tap_tempo_in_a_pseudo_terminal_sets_the_tempo_the_taps_give() {
     // 24 quarters written at 60 BPM (24 s); tapped at 240 BPM, four times as fast.
-    let file = scratch("taps.mid", &quarters_file(24, 60.0));
+    let file = scratch("taps.mid", &support::quarters_smf(24, 60.0));
     let tmux = Tmux::start(
         "tap",
         &format!(
@@ -244,7 +228,7 @@ fn tap_tempo_in_a_pseudo_terminal_sets_the_tempo_the_taps_give() {
 /// a core busy after the piece, for ever).
 #[test]
 fn a_terminal_that_hangs_up_stops_the_performance_and_releases_every_key() {
-    let file = scratch("long.mid", &quarters_file(120, 60.0));
+    let file = scratch("long.mid", &support::quarters_smf(120, 60.0));
     let pidfile = std::env::temp_dir().join(format!("orch-view-pid-{}", std::process::id()));
     let _ = std::fs::remove_file(&pidfile);
     let socket = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
