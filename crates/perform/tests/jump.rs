@@ -7,7 +7,7 @@ use orch_perform::{perform, song_events, Control, Link, Live, MidiRecording, Pla
 use orch_seq::{Song, VirtualClock};
 
 mod common;
-use common::{corpus_song, note_ons_at, setup};
+use common::{corpus_song, note_ons_at, setup, ActAt};
 
 /// The score's Note-Ons: (score time, note number), in order.
 fn score_notes(song: &Song) -> Vec<(u64, u8)> {
@@ -288,37 +288,6 @@ fn every_robot_sharing_a_control_takes_the_jump_and_the_tempo() {
     }
 }
 
-/// A clock that asks for a jump in the wait that ends at `at_us` after the score's start (or
-/// later): the performer takes it right after what it sends then.
-struct JumpAt {
-    inner: VirtualClock,
-    control: Arc<Control>,
-    at_us: u64,
-    target_us: u64,
-    done: bool,
-}
-
-impl orch_seq::Clock for JumpAt {
-    fn now_us(&self) -> u64 {
-        self.inner.now_us()
-    }
-
-    fn wait_until(&mut self, deadline_us: u64) -> u64 {
-        if let Some(m) = self.control.time_map() {
-            let start = m.wall(0).max(0) as u64;
-            if !self.done && deadline_us >= start + self.at_us {
-                self.control.jump_to(self.target_us);
-                self.done = true;
-            }
-        }
-        self.inner.wait_until(deadline_us)
-    }
-
-    fn lateness(&self) -> orch_seq::Lateness {
-        self.inner.lateness()
-    }
-}
-
 /// A jump asked right after a press went out early: the key is let go only once the strike
 /// has sounded (as at the end of a song), so the note sent is heard, not cut to a click.
 #[test]
@@ -330,13 +299,9 @@ fn a_jump_right_after_a_press_lets_that_strike_sound() {
     let key = usize::from(score[k].1 - 36);
     let lead = setup.rules().press_lead_us[key];
     let control: Arc<Control> = Control::new();
-    let mut clock = JumpAt {
-        inner: VirtualClock::new(),
-        control: Arc::clone(&control),
-        at_us: score[k].0 - lead,
-        target_us: 10_000_000,
-        done: false,
-    };
+    let mut clock = ActAt::new(&control, score[k].0 - lead, |c: &Control| {
+        c.jump_to(10_000_000)
+    });
     let mut live = |_: &Live| {};
     let played = perform::<_, MidiRecording>(
         &setup,

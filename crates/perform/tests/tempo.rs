@@ -10,7 +10,7 @@ use orch_perform::{
 use orch_seq::{Song, VirtualClock};
 
 mod common;
-use common::{note_ons, note_ons_at};
+use common::{note_ons, note_ons_at, ActAt};
 
 #[test]
 fn a_tempo_change_mid_piece_plays_every_note_once_in_order() {
@@ -182,37 +182,6 @@ fn a_pause_releases_every_key_and_the_rest_plays_once_after_it() {
     pause_and_resume(Link::Direct, false);
 }
 
-/// A clock that asks for a tempo change in the wait that ends at `at_us` after the score's
-/// start (or later): the performer takes it right after what it sends then.
-struct ChangeAt {
-    inner: VirtualClock,
-    control: Arc<Control>,
-    at_us: u64,
-    tempo: Tempo,
-    done: bool,
-}
-
-impl orch_seq::Clock for ChangeAt {
-    fn now_us(&self) -> u64 {
-        self.inner.now_us()
-    }
-
-    fn wait_until(&mut self, deadline_us: u64) -> u64 {
-        if let Some(m) = self.control.time_map() {
-            let start = m.wall(0).max(0) as u64;
-            if !self.done && deadline_us >= start + self.at_us {
-                self.control.set_tempo(self.tempo);
-                self.done = true;
-            }
-        }
-        self.inner.wait_until(deadline_us)
-    }
-
-    fn lateness(&self) -> orch_seq::Lateness {
-        self.inner.lateness()
-    }
-}
-
 /// A tempo change after a press went out early: it is not taken back (the note strikes
 /// once, when it was going to), and the note the change made late is counted late.
 #[test]
@@ -239,13 +208,9 @@ fn a_change_after_an_early_press_counts_the_note_it_made_late() {
     let lead = setup.rules().press_lead_us[24 + 1];
     let control: Arc<Control> = Control::new();
     // The second note's press goes out `lead` before 1 s; three times as fast from then.
-    let mut clock = ChangeAt {
-        inner: VirtualClock::new(),
-        control: Arc::clone(&control),
-        at_us: 1_000_000 - lead,
-        tempo: Tempo::new(3.0).unwrap(),
-        done: false,
-    };
+    let mut clock = ActAt::new(&control, 1_000_000 - lead, |c: &Control| {
+        c.set_tempo(Tempo::new(3.0).unwrap())
+    });
     let mut live = |_: &Live| {};
     let played = perform::<_, MidiRecording>(
         &setup,
@@ -257,7 +222,7 @@ fn a_change_after_an_early_press_counts_the_note_it_made_late() {
         Some(&mut live),
     )
     .unwrap();
-    assert!(clock.done);
+    assert!(clock.done());
     let r = played.report(None);
     assert!(r.adds_up(), "{r:?}");
     assert_eq!(r.strikes, 3, "every note struck once");

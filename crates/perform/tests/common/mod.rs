@@ -4,9 +4,11 @@
 
 use std::path::PathBuf;
 
+use std::sync::Arc;
+
 use orch_core::Config;
 use orch_perform::{
-    perform, thesis_config, Link, MidiOut, MidiRecording, Played, ScoreEvent, Setup, Tempo,
+    perform, thesis_config, Control, Link, MidiOut, MidiRecording, Played, ScoreEvent, Setup, Tempo,
 };
 use orch_seq::{Song, VirtualClock};
 
@@ -93,4 +95,52 @@ pub fn note_ons_at(out: &MidiRecording) -> Vec<(u64, u8)> {
 /// The note numbers of the Note-Ons sent, in order.
 pub fn note_ons(out: &MidiRecording) -> Vec<u8> {
     note_ons_at(out).into_iter().map(|(_, n)| n).collect()
+}
+
+/// A clock that acts on the performer's [`Control`] once (a jump, a tempo change), in the wait
+/// that ends at `at_us` after the score's start or later: the performer takes it right after
+/// what it sends then.
+pub struct ActAt<F: FnMut(&Control)> {
+    inner: VirtualClock,
+    control: Arc<Control>,
+    at_us: u64,
+    act: Option<F>,
+}
+
+impl<F: FnMut(&Control)> ActAt<F> {
+    /// Whether it has acted.
+    pub fn done(&self) -> bool {
+        self.act.is_none()
+    }
+
+    pub fn new(control: &Arc<Control>, at_us: u64, act: F) -> Self {
+        Self {
+            inner: VirtualClock::new(),
+            control: Arc::clone(control),
+            at_us,
+            act: Some(act),
+        }
+    }
+}
+
+impl<F: FnMut(&Control)> orch_seq::Clock for ActAt<F> {
+    fn now_us(&self) -> u64 {
+        self.inner.now_us()
+    }
+
+    fn wait_until(&mut self, deadline_us: u64) -> u64 {
+        if let Some(m) = self.control.time_map() {
+            let start = m.wall(0).max(0) as u64;
+            if deadline_us >= start + self.at_us {
+                if let Some(mut act) = self.act.take() {
+                    act(&self.control);
+                }
+            }
+        }
+        self.inner.wait_until(deadline_us)
+    }
+
+    fn lateness(&self) -> orch_seq::Lateness {
+        self.inner.lateness()
+    }
 }
