@@ -79,26 +79,6 @@ fn collect_lines(out: ChildStdout) -> (Lines, std::thread::JoinHandle<()>) {
     (lines, t)
 }
 
-/// Standard error, collected; `ready` gets a message when `orch run` says it reads.
-fn collect_stderr(child: &mut Child) -> (Arc<Mutex<String>>, mpsc::Receiver<()>) {
-    let err = child.stderr.take().unwrap();
-    let text = Arc::new(Mutex::new(String::new()));
-    let sink = Arc::clone(&text);
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(err).lines() {
-            let Ok(line) = line else { return };
-            if line.contains("reading") {
-                let _ = tx.send(());
-            }
-            let mut s = sink.lock().unwrap();
-            s.push_str(&line);
-            s.push('\n');
-        }
-    });
-    (text, rx)
-}
-
 fn run_orch(args: &[&str], stdin: Stdio) -> Child {
     Command::new(ORCH)
         .arg("run")
@@ -322,7 +302,7 @@ fn serial_pty_at_wire_pace_gives_what_interpret_gives() {
         Stdio::null(),
     );
     let (lines, reader) = collect_lines(child.stdout.take().unwrap());
-    let (stderr, ready) = collect_stderr(&mut child);
+    let (stderr, ready) = support::collect_stderr(&mut child);
     wait_ready(&ready, &stderr);
     let sent = paced(&mut master, &bytes, WIRE_BYTE);
     std::thread::sleep(Duration::from_millis(300));
@@ -380,7 +360,7 @@ fn a_serial_device_that_goes_away_releases_every_key_and_is_read_again_when_it_r
         Stdio::null(),
     );
     let (lines, reader) = collect_lines(child.stdout.take().unwrap());
-    let (stderr, ready) = collect_stderr(&mut child);
+    let (stderr, ready) = support::collect_stderr(&mut child);
     wait_ready(&ready, &stderr);
     let count = || lines.lock().unwrap().len();
     let wait_lines = |n: usize| {
@@ -461,7 +441,7 @@ fn udp_chord_then_sigterm_releases_every_key() {
         Stdio::null(),
     );
     let (lines, reader) = collect_lines(child.stdout.take().unwrap());
-    let (stderr, ready) = collect_stderr(&mut child);
+    let (stderr, ready) = support::collect_stderr(&mut child);
     wait_ready(&ready, &stderr);
     let s = UdpSocket::bind("127.0.0.1:0").unwrap();
     // Notes 36 (board 0x21), 60 and 64 (0x22), 90 (0x24).
@@ -603,7 +583,7 @@ fn flood_and_garbage_lose_no_message_and_are_counted() {
     let mut child = run_orch(&["--in", "-", "--json", "--verbose"], Stdio::piped());
     let mut stdin = child.stdin.take().unwrap();
     let (lines, reader) = collect_lines(child.stdout.take().unwrap());
-    let (stderr, _) = collect_stderr(&mut child);
+    let (stderr, _) = support::collect_stderr(&mut child);
     paced(&mut stdin, &bytes, WIRE_BYTE / 10);
     drop(stdin);
     let status = wait_exit(&mut child, Duration::from_secs(20));
@@ -740,7 +720,7 @@ fn sighup_reloads_without_dropping_held_keys_and_sigusr1_counts() {
     );
     let mut stdin = child.stdin.take().unwrap();
     let (lines, reader) = collect_lines(child.stdout.take().unwrap());
-    let (stderr, ready) = collect_stderr(&mut child);
+    let (stderr, ready) = support::collect_stderr(&mut child);
     wait_ready(&ready, &stderr);
     stdin.write_all(&[0x90, 60, 100]).unwrap();
     stdin.flush().unwrap();

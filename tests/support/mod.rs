@@ -40,3 +40,30 @@ pub fn pty_master(raw: bool) -> (std::fs::File, String) {
     let file = unsafe { std::fs::File::from_raw_fd(master.into_raw_fd()) };
     (file, path)
 }
+
+/// A child's standard error, collected as it comes; `ready` gets a message when `orch run`
+/// says it reads.
+pub fn collect_stderr(
+    child: &mut std::process::Child,
+) -> (
+    std::sync::Arc<std::sync::Mutex<String>>,
+    std::sync::mpsc::Receiver<()>,
+) {
+    use std::io::BufRead;
+    let err = child.stderr.take().unwrap();
+    let text = std::sync::Arc::new(std::sync::Mutex::new(String::new()));
+    let sink = std::sync::Arc::clone(&text);
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(err).lines() {
+            let Ok(line) = line else { return };
+            if line.contains("reading") {
+                let _ = tx.send(());
+            }
+            let mut s = sink.lock().unwrap();
+            s.push_str(&line);
+            s.push('\n');
+        }
+    });
+    (text, rx)
+}
