@@ -174,18 +174,27 @@ impl<const K: usize> Fingers<K> {
     /// by more than the cap). One pass over the keys.
     pub fn clamp_ages(&mut self, before: u32, now: u32, far: bool) {
         for stamp in self.stamp.iter_mut() {
-            *stamp = if far {
-                now.wrapping_sub(AGE_CAP)
-            } else {
-                clamp_stamp(clamp_stamp(*stamp, before), now)
-            };
+            *stamp = clamp_across(*stamp, before, now, far);
         }
+    }
+}
+
+/// A stamp after the clock passed a multiple of 2³⁰ µs from `before` to `now` (see
+/// [`Fingers::clamp_ages`]): clamped at `before`, then at `now`, or, with `far`, as old as the
+/// cap at `now`. Out of line: it runs every 18 minutes, and its 32-bit compares are large on
+/// an 8-bit MCU, so the keys and the last input's time share one copy.
+#[inline(never)]
+pub(crate) fn clamp_across(stamp: u32, before: u32, now: u32, far: bool) -> u32 {
+    if far {
+        now.wrapping_sub(AGE_CAP)
+    } else {
+        clamp_stamp(clamp_stamp(stamp, before), now)
     }
 }
 
 /// `stamp`, or `at − AGE_CAP` if it is older than that at `at`.
 #[inline(always)]
-pub(crate) fn clamp_stamp(stamp: u32, at: u32) -> u32 {
+fn clamp_stamp(stamp: u32, at: u32) -> u32 {
     if at.wrapping_sub(stamp) >= AGE_CAP {
         at.wrapping_sub(AGE_CAP)
     } else {

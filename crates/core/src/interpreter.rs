@@ -3,7 +3,7 @@
 use crate::config::{Config, ConfigError, ConfigSource, DutyLimit, GuardConfig, Overlap, Thesis};
 use crate::decoder::{Counters, Decoder};
 use crate::fingers::{
-    clamp_stamp, Fingers, AGE_CAP, DOWN, FOLDED, LATE, PENDING, RELEASE_AFTER, RELEASING,
+    clamp_across, Fingers, AGE_CAP, DOWN, FOLDED, LATE, PENDING, RELEASE_AFTER, RELEASING,
 };
 use crate::frame::{FingerFrame, FlushError};
 use crate::held::{HeldNotes, NoteTable};
@@ -82,11 +82,11 @@ impl Kept {
     }
 
     /// After the clock jumped from `before` by `jump` µs (`before` and `now` their low 32
-    /// bits; `jump` saturated at `u32::MAX`; a cold path, a jump past a multiple of 2³⁰ µs): a
+    /// bits; `jump` saturated at `u32::MAX`; a cold path, a jump past a multiple of 2³⁰ µs, so out of line): a
     /// deadline the jump reached or passed is kept as passed at `now`, so that it stays within
     /// reach of the clock whatever the jump (its exact instant no longer matters: the next
     /// call runs what falls due, at `now`).
-    #[inline(always)]
+    #[inline(never)]
     fn reach(self, before: u32, jump: u32, now: u32) -> Self {
         let ahead = self.at.wrapping_sub(before) as i32;
         if self.set && (ahead <= 0 || jump >= ahead as u32) {
@@ -741,11 +741,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         // jump first.
         let far = jump >= AGE_CAP;
         self.fingers.clamp_ages(before, now, far);
-        self.last_input = if far {
-            now.wrapping_sub(AGE_CAP)
-        } else {
-            clamp_stamp(clamp_stamp(self.last_input, before), now)
-        };
+        self.last_input = clamp_across(self.last_input, before, now, far);
         // The kept deadlines: one the jump reached is passed, at `now`.
         self.due = self.due.reach(before, jump, now);
         self.wake = self.wake.reach(before, jump, now);
