@@ -597,8 +597,11 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         let min_press = g.min_press.as_micros();
         let gap = rest_us(g);
         // The next per-key deadline, in µs from now.
-        let mut next: Option<u32> = None;
-        let mut soonest = |t: u32| next = Some(next.map_or(t, |n| n.min(t)));
+        // (`u32::MAX`: none. No timer is that long: every limit is at most `MAX_LIMIT`, and a
+        // key struck with no limit at all has no deadline. One compare where an `Option` took
+        // four copies of its code on an 8-bit MCU.)
+        let mut next = u32::MAX;
+        let mut soonest = |t: u32| next = next.min(t);
         // Only keys down or waiting have timers; a released key needs no visit (its rest is
         // measured from its stamp when a note comes).
         let mut from = 0;
@@ -656,7 +659,11 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 soonest(gap - age);
             }
         }
-        self.due = next.map_or(Kept::NEVER, |n| Kept::at(now.wrapping_add(n)));
+        self.due = if next == u32::MAX {
+            Kept::NEVER
+        } else {
+            Kept::at(now.wrapping_add(next))
+        };
     }
 
     fn keys(&self) -> u8 {
@@ -1159,6 +1166,33 @@ mod tests {
         assert_eq!(i.stats().dropped_power, 1);
         i.feed_slice(&[0x80, 62, 0, 60, 0], Instant::ZERO);
         assert_eq!(i.keys_down(), 1);
+    }
+
+    /// With no hold limit (and no watchdog), a key that strikes after waiting for its rest
+    /// has no deadline: `next_deadline` says none, not one already past.
+    #[test]
+    fn a_delayed_strike_with_no_hold_limit_leaves_no_deadline() {
+        let config = Config {
+            guard: GuardConfig {
+                max_hold: None,
+                watchdog: None,
+                late_limit: None,
+                duty: None,
+                ..GuardConfig::DEFAULT
+            },
+            ..Config::THESIS
+        };
+        let mut i = Interpreter::<4, 61, NotePool<32>>::new(config).unwrap();
+        let t = Instant::from_millis;
+        i.feed_slice(&[0x90, 60, 100], t(0));
+        i.feed_slice(&[0x80, 60, 0], t(30));
+        i.feed_slice(&[0x90, 60, 100], t(40)); // waits for the 60 ms rest
+        assert_eq!(i.key_phase(24), KeyPhase::Waiting);
+        let strike = i.next_deadline().expect("the rest's end");
+        assert_eq!(strike, t(90));
+        i.tick(strike);
+        assert_eq!(i.key_phase(24), KeyPhase::Down);
+        assert_eq!(i.next_deadline(), None);
     }
 
     #[test]
