@@ -95,7 +95,14 @@ impl<const K: usize> Fingers<K> {
     /// Microseconds since the key's stamp at `now` (the low 32 bits of the clock), at most
     /// [`AGE_CAP`].
     pub fn age(&self, key: u8, now: u32) -> u32 {
-        now.wrapping_sub(self.stamp[key as usize]).min(AGE_CAP)
+        let age = now.wrapping_sub(self.stamp[key as usize]);
+        // `age.min(AGE_CAP)`: the cap is 2³¹, so the sign bit says it (one bit test on an
+        // 8-bit MCU, not a 32-bit compare and select).
+        if (age as i32) < 0 {
+            AGE_CAP
+        } else {
+            age
+        }
     }
 
     /// Moves `key` to `phase`, stamped `now` (the low 32 bits of the clock), keeping the
