@@ -134,13 +134,13 @@ fn main() -> ! {
                     break;
                 }
                 tick(robot, d);
-                deadline = robot.next_deadline_low32();
+                deadline = next_deadline(robot);
             }
             // Most bytes only begin or continue a message: the frame and the deadline are as
             // they were.
             if robot.feed_low32(byte, at) {
                 flush(robot);
-                deadline = robot.next_deadline_low32();
+                deadline = next_deadline(robot);
             }
             // A note message waiting for its last byte: its board addressed on the bus while
             // that byte is on the wire (or the transaction ended, if it wrote nothing).
@@ -153,7 +153,7 @@ fn main() -> ! {
             if reached(now, d) {
                 probe::work(true);
                 tick(robot, d);
-                deadline = robot.next_deadline_low32();
+                deadline = next_deadline(robot);
                 probe::work(false);
             }
         }
@@ -176,10 +176,18 @@ fn main() -> ! {
             // no timer is due (those run above, one a turn, each at its own time).
             if deadline.is_none_or(|d| !reached(now, d)) {
                 tick(robot, now);
-                deadline = robot.next_deadline_low32();
+                deadline = next_deadline(robot);
             }
         }
     }
+}
+
+/// The guard's next deadline (the low 32 bits of the µs clock). Out of line: asked at four
+/// places in the loop, ≈ 170 bytes of flash less than inlined four times, for a call on a
+/// message that completes.
+#[inline(never)]
+fn next_deadline(robot: &Robot) -> Option<u32> {
+    robot.next_deadline_low32()
 }
 
 /// Whether `now`, the low 32 bits of the µs clock, is at or past `at` (less than 35 minutes
