@@ -10,7 +10,7 @@
 //! cargo run --release --example profile [-- SECONDS]   # after building the firmware
 //! ```
 
-use avr_simulator::{ffi, AvrSimulator, TwiPacket};
+use avr_simulator::{AvrSimulator, TwiPacket};
 use orch_atmega16_hil::{elf_path, F_CPU, SIM_BYTE_US};
 
 fn main() {
@@ -25,7 +25,7 @@ fn main() {
         (p.is_start() || p.is_write() || p.is_stop()).then(|| p.respond_ack())
     });
     // `AvrSimulator` keeps its `avr_t` to itself; its Debug output names the pointer.
-    let avr = avr_pointer(&format!("{sim:?}"));
+    let avr = orch_atmega16_hil::avr_pointer(&format!("{sim:?}"));
 
     // `ORCH_PROFILE_STREAM=notes`: the figures' six note messages (own status and running
     // status, Note-On and Note-Off) over and over, each followed by 3 ms of silence, so that
@@ -179,16 +179,4 @@ fn symbols(elf: &std::path::Path) -> Vec<(u32, u32, String)> {
         .collect();
     v.sort();
     v
-}
-
-fn avr_pointer(debug: &str) -> *const ffi::avr_t {
-    let at = debug
-        .find("inner: 0x")
-        .expect("Avr { inner: 0x… } in the Debug output")
-        + 9;
-    let hex: String = debug[at..]
-        .chars()
-        .take_while(|c| c.is_ascii_hexdigit())
-        .collect();
-    usize::from_str_radix(&hex, 16).unwrap() as *const ffi::avr_t
 }

@@ -6,6 +6,7 @@ use std::cell::{Cell, RefCell};
 use std::path::PathBuf;
 use std::rc::Rc;
 
+use avr_simulator::AvrSimulator;
 use avr_tester::{AvrTester, Reader, TwiPacket, TwiSlave};
 use orch_core::{BoardId, Config, FingerBoards, Instant, Interpreter, NotePool};
 
@@ -110,6 +111,12 @@ impl Pca9555 {
     /// Pins driven high: outputs (configuration 0) whose output bit is 1.
     pub fn driven_high(&self) -> u16 {
         self.outputs() & !self.config()
+    }
+
+    /// Whether a write addressed to this board has begun and not ended, and how many bytes
+    /// of it (the register byte first) have come.
+    pub fn in_write(&self) -> Option<usize> {
+        (self.active && !self.reading).then_some(self.bytes.len())
     }
 
     /// Power-cycles the board.
@@ -417,6 +424,146 @@ impl Hil {
         }
         v * 2
     }
+}
+
+/// The firmware on simavr directly, not through avr-tester, for the tests that need the CPU
+/// itself: its program counter, to send the firmware into its panic path at a chosen moment.
+/// The same four boards; MIDI in on the UART, thru read and dropped.
+pub struct Cpu {
+    /// The simulator.
+    pub sim: AvrSimulator,
+    /// simavr's CPU state (`AvrSimulator` keeps it to itself: see [`avr_pointer`]).
+    avr: *mut avr_simulator::ffi::avr_t,
+    /// CPU cycles run so far.
+    pub cycles: Rc<Cell<u64>>,
+    /// The boards.
+    pub bus: Rc<RefCell<Bus>>,
+}
+
+impl Default for Cpu {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Cpu {
+    /// Loads the firmware and attaches the boards. Does not run anything yet.
+    pub fn new() -> Self {
+        let elf = elf_path();
+        assert!(elf.exists(), "no firmware at {}", elf.display());
+        let mut sim = AvrSimulator::new("atmega16", F_CPU as u32, &elf);
+        let cycles = Rc::new(Cell::new(0));
+        let bus = Rc::new(RefCell::new(Bus::default()));
+        sim.set_twi_slave(
+            0,
+            Slave {
+                bus: bus.clone(),
+                cycles: cycles.clone(),
+            },
+        );
+        let avr = avr_pointer(&format!("{sim:?}"));
+        Self {
+            sim,
+            avr,
+            cycles,
+            bus,
+        }
+    }
+
+    /// The simulated time in µs.
+    pub fn now_us(&self) -> u64 {
+        self.cycles.get() / (F_CPU / 1_000_000)
+    }
+
+    /// Runs for `us` microseconds, or until `stop` says so after an instruction; returns
+    /// whether it stopped.
+    pub fn run_us_until(&mut self, us: u64, mut stop: impl FnMut(&Bus) -> bool) -> bool {
+        let end = self.cycles.get() + us * (F_CPU / 1_000_000);
+        while self.cycles.get() < end {
+            let n = self.sim.step().tt.as_cycles();
+            self.cycles.set(self.cycles.get() + n);
+            while self.sim.read_uart('0').is_some() {}
+            if stop(&self.bus.borrow()) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Runs for `us` microseconds.
+    pub fn run_us(&mut self, us: u64) {
+        self.run_us_until(us, |_| false);
+    }
+
+    /// Sends bytes back to back at wire pacing (one every 320 µs).
+    pub fn send(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.sim.write_uart('0', b);
+            self.run_us(BYTE_US);
+        }
+    }
+
+    /// Every board's outputs.
+    pub fn outputs(&self) -> [u16; 4] {
+        self.bus.borrow().outputs()
+    }
+
+    /// The program counter (a byte address).
+    pub fn pc(&self) -> u32 {
+        // SAFETY: the simulator is alive and not running.
+        unsafe { (*self.avr).pc }
+    }
+
+    /// Whether interrupts are on (SREG's I bit).
+    pub fn interrupts_on(&self) -> bool {
+        // SAFETY: as above.
+        unsafe { (*self.avr).sreg[7] != 0 }
+    }
+
+    /// A byte of the data space (registers, I/O at 0x20.., SRAM at 0x60..).
+    pub fn data(&self, address: u16) -> u8 {
+        // SAFETY: as above; the data space is larger than any address the tests read.
+        unsafe { *(*self.avr).data.add(address as usize) }
+    }
+
+    /// Sends the CPU to the firmware's function `symbol` (its unmangled name, as `avr-nm`
+    /// lists it) before its next instruction, as a call from anywhere would, with whatever
+    /// the interrupts and peripherals were doing left as it was.
+    pub fn jump_to(&mut self, symbol: &str) {
+        let at = symbol_address(&elf_path(), symbol)
+            .unwrap_or_else(|| panic!("no symbol {symbol} in the firmware"));
+        // SAFETY: the simulator is alive and not running; `pc` is a byte address.
+        unsafe { (*self.avr).pc = at };
+    }
+}
+
+/// The address of `symbol` (an unmangled name) in `elf`, by `avr-nm`.
+pub fn symbol_address(elf: &std::path::Path, symbol: &str) -> Option<u32> {
+    let out = std::process::Command::new("avr-nm")
+        .args(["--defined-only"])
+        .arg(elf)
+        .output()
+        .expect("avr-nm (Debian's binutils-avr)");
+    String::from_utf8_lossy(&out.stdout).lines().find_map(|l| {
+        let mut p = l.split(' ');
+        let addr = u32::from_str_radix(p.next()?, 16).ok()?;
+        let _kind = p.next()?;
+        (p.next()? == symbol).then_some(addr)
+    })
+}
+
+/// simavr's `avr_t` inside an [`AvrSimulator`]: it keeps the pointer private, but its Debug
+/// output names it (`Avr { inner: 0x… }`).
+pub fn avr_pointer(debug: &str) -> *mut avr_simulator::ffi::avr_t {
+    let at = debug
+        .find("inner: 0x")
+        .expect("Avr { inner: 0x… } in the Debug output")
+        + 9;
+    let hex: String = debug[at..]
+        .chars()
+        .take_while(|c| c.is_ascii_hexdigit())
+        .collect();
+    usize::from_str_radix(&hex, 16).unwrap() as *mut avr_simulator::ffi::avr_t
 }
 
 /// One board write with its time: on the host, when the interpreter made it; from the

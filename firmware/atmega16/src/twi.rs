@@ -463,6 +463,49 @@ pub fn check() {
     });
 }
 
+/// Lets go of every key at once, whatever the bus was doing: a panic's last act, with
+/// interrupts off. The bus is freed by hand first ([`recover`]: it ends a transaction cut
+/// short, a board still holding SDA is clocked free), then each board is written outputs 0 by
+/// polling (a board that does not answer ignores the bytes after its address), each step
+/// bounded by [`STEP_TIMEOUT_US`]: a dead bus costs at most a few ms, and the watchdog's
+/// reset (power-up releases every key) follows either way.
+pub fn release_all_now() {
+    recover();
+    for board in 0..4u8 {
+        let _ = step(TWINT | TWSTA | TWEN)
+            && send((ADDRESSES[0] + board) << 1)
+            && send(OUTPUT_PORT_0)
+            && send(0)
+            && send(0);
+        // A STOP ends the write, or what of it went out.
+        control(TWINT | TWSTO | TWEN);
+        let t0 = clock::ticks16_raw();
+        while twi().twcr.read().bits() & TWSTO != 0
+            && clock::ticks16_raw().wrapping_sub(t0) < STEP_TIMEOUT_US
+        {}
+    }
+}
+
+/// One byte of a polled write.
+fn send(byte: u8) -> bool {
+    twi().twdr.write(|w| unsafe { w.bits(byte) });
+    step(TWINT | TWEN)
+}
+
+/// One polled bus step (`bits` into TWCR, the TWI interrupt off): whether it ended within
+/// [`STEP_TIMEOUT_US`].
+#[inline(never)]
+fn step(bits: u8) -> bool {
+    control(bits);
+    let t0 = clock::ticks16_raw();
+    while twi().twcr.read().bits() & TWINT == 0 {
+        if clock::ticks16_raw().wrapping_sub(t0) >= STEP_TIMEOUT_US {
+            return false;
+        }
+    }
+    true
+}
+
 /// Frees a stuck bus: TWI off, up to nine SCL pulses by hand until SDA is high, a STOP,
 /// TWI back on. About 200 µs, with interrupts off.
 #[inline(never)]
