@@ -48,12 +48,17 @@ const WDP_HALF_SECOND: u8 = 0b101;
 /// follows), the watchdog on at about 0.5 s and never reset again, the CPU in `abort`'s final
 /// loop. (simavr itself crashes in its watchdog reset, in `avr_irq_register_notify` as it
 /// resets the UART, so the reset is not run here: power-up's release is tested on its own.)
-fn waits_for_the_watchdog(mut cpu: Cpu) {
+fn waits_for_the_watchdog(cpu: Cpu) {
+    waits_for_the_watchdog_with(cpu, [0; 4]);
+}
+
+/// [`waits_for_the_watchdog`], the boards holding `outputs`.
+fn waits_for_the_watchdog_with(mut cpu: Cpu, outputs: [u16; 4]) {
     // The last write's STOP.
     cpu.run_us(1_000);
     let writes = cpu.bus.borrow().log.len();
     cpu.run_us(400_000);
-    assert_eq!(cpu.outputs(), [0; 4]);
+    assert_eq!(cpu.outputs(), outputs);
     assert_eq!(
         cpu.bus.borrow().log.len(),
         writes,
@@ -97,4 +102,28 @@ fn a_panic_with_the_bus_held_for_a_velocity_lets_every_key_go_at_once() {
     println!("bus held ahead: every key up {up} µs after the panic");
     assert!(up < 2_500, "{up} µs");
     waits_for_the_watchdog(cpu);
+}
+
+#[test]
+fn a_panic_with_a_board_not_answering_still_lets_the_others_go() {
+    let mut cpu = Cpu::new();
+    cpu.run_us(20_000);
+    cpu.send(&[0x90, 36, 100, 52, 100, 68, 100, 84, 100]);
+    cpu.run_us(3_000);
+    let held = cpu.outputs();
+    assert!(held.iter().all(|&o| o != 0), "{held:x?}");
+    // Board 2 stops answering (its keys are out of reach), then the panic.
+    cpu.bus.borrow_mut().boards[2].nack = true;
+    cpu.jump_to("abort");
+    let at = cpu.now_us();
+    let released = |bus: &Bus| {
+        let o = bus.outputs();
+        o[0] == 0 && o[1] == 0 && o[3] == 0
+    };
+    assert!(cpu.run_us_until(10_000, released), "{:x?}", cpu.outputs());
+    let up = cpu.now_us() - at;
+    println!("board 2 not answering: the other keys up {up} µs after the panic");
+    assert!(up < 2_500, "{up} µs");
+    assert_eq!(cpu.outputs()[2], held[2]);
+    waits_for_the_watchdog_with(cpu, [0, 0, held[2], 0]);
 }

@@ -467,7 +467,7 @@ pub fn check() {
 /// interrupts off. The bus is freed by hand first ([`recover`]: it ends a transaction cut
 /// short, a board still holding SDA is clocked free), then each board is written outputs 0 by
 /// polling (a board that does not answer ignores the bytes after its address), each step
-/// bounded by [`STEP_TIMEOUT_US`]: a dead bus costs at most a few ms, and the watchdog's
+/// bounded by [`STEP_TIMEOUT_US`]: a dead bus costs at most ≈ 8 ms, and the watchdog's
 /// reset (power-up releases every key) follows either way.
 pub fn release_all_now() {
     recover();
