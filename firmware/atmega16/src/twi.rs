@@ -335,10 +335,7 @@ fn begin() {
 
 /// Sends a START for the write at `Q_TAIL`, once the last STOP is out. Main loop only.
 fn restart() {
-    let t0 = clock::ticks16_raw();
-    while twi().twcr.read().bits() & TWSTO != 0
-        && clock::ticks16_raw().wrapping_sub(t0) < STEP_TIMEOUT_US
-    {}
+    stop_sent();
     unsafe {
         STEP = 1;
         STEP_AT = clock::ticks16_raw();
@@ -479,11 +476,16 @@ pub fn release_all_now() {
             && send(0);
         // A STOP ends the write, or what of it went out.
         control(TWINT | TWSTO | TWEN);
-        let t0 = clock::ticks16_raw();
-        while twi().twcr.read().bits() & TWSTO != 0
-            && clock::ticks16_raw().wrapping_sub(t0) < STEP_TIMEOUT_US
-        {}
+        stop_sent();
     }
+}
+
+/// Waits until the last STOP is out (TWSTO clears), at most [`STEP_TIMEOUT_US`].
+fn stop_sent() {
+    let t0 = clock::ticks16_raw();
+    while twi().twcr.read().bits() & TWSTO != 0
+        && clock::ticks16_raw().wrapping_sub(t0) < STEP_TIMEOUT_US
+    {}
 }
 
 /// One byte of a polled write.
