@@ -13,25 +13,12 @@ use orch_seq::{Clock, Lateness, Song, VirtualClock};
 
 mod common;
 
-/// A Standard MIDI File: `beats` quarter notes at `bpm` (480 ticks a quarter), one note each,
-/// half a beat long.
+#[path = "../../../tests/support/smf.rs"]
+mod smf;
+
+/// [`smf::quarters_smf`] parsed.
 fn quarters(beats: u32, bpm: f64) -> Song {
-    let mut trk = Vec::new();
-    let upq = (60e6 / bpm).round() as u32;
-    trk.extend_from_slice(&[0x00, 0xFF, 0x51, 0x03]);
-    trk.extend_from_slice(&upq.to_be_bytes()[1..]);
-    for i in 0..beats {
-        let n = 48 + (i % 24) as u8;
-        // On at the quarter, off 240 ticks later, the next on 240 ticks after that.
-        let delta: &[u8] = if i == 0 { &[0x00] } else { &[0x81, 0x70] };
-        trk.extend_from_slice(delta);
-        trk.extend_from_slice(&[0x90, n, 100, 0x81, 0x70, 0x80, n, 0]);
-    }
-    trk.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
-    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
-    smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
-    smf.extend_from_slice(&trk);
-    Song::parse(&smf).unwrap()
+    Song::parse(&smf::quarters_smf(beats, bpm)).unwrap()
 }
 
 /// A clock whose waits deliver the conductor's input falling inside them: each input at its
