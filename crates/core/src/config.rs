@@ -1,5 +1,8 @@
 //! The interpreter's settings: a plain struct, no allocation.
 
+#[cfg(feature = "dynamics")]
+use crate::dynamics::Dynamics;
+use crate::dynamics::DynamicsError;
 use crate::keymap::{KeyRange, Layout, OutOfRange};
 use crate::time::Duration;
 use crate::values::ChannelMask;
@@ -154,6 +157,12 @@ pub struct Config<const B: usize> {
     pub overlap: Overlap,
     /// The safety guard. Default: on, see [`GuardConfig`].
     pub guard: GuardConfig,
+    /// How a press is played on PWM boards: strike, hold and each key's velocity curve.
+    /// Default: [`Dynamics::ON_OFF`] (every key on/off, velocity ignored). See
+    /// [`dynamics`](crate::dynamics). Needs the `dynamics` feature (the per-key table is
+    /// 768 bytes, kept out of small MCUs' RAM).
+    #[cfg(feature = "dynamics")]
+    pub dynamics: Dynamics,
 }
 
 impl Config<4> {
@@ -166,6 +175,8 @@ impl Config<4> {
         sustain: false,
         overlap: Overlap::Restrike,
         guard: GuardConfig::DEFAULT,
+        #[cfg(feature = "dynamics")]
+        dynamics: Dynamics::ON_OFF,
     };
 }
 
@@ -240,6 +251,8 @@ pub enum ConfigError {
     BadDuty,
     /// A duty limit was asked of a build without the `duty-limit` feature.
     DutyUnsupported,
+    /// The dynamics cannot be played: see [`DynamicsError`].
+    Dynamics(DynamicsError),
 }
 
 impl core::fmt::Display for ConfigError {
@@ -263,6 +276,7 @@ impl core::fmt::Display for ConfigError {
             ConfigError::DutyUnsupported => {
                 f.write_str("guard duty limit: this build has no duty-limit feature")
             }
+            ConfigError::Dynamics(e) => write!(f, "dynamics: {e}"),
             ConfigError::BadDuty => f.write_str(
                 "guard duty limit: max_on must be above 0, at most the window and at most 60 s",
             ),
@@ -291,6 +305,13 @@ impl<const B: usize> Config<B> {
             }
         }
         let g = &self.guard;
+        #[cfg(feature = "dynamics")]
+        if !self.dynamics.is_on_off() {
+            let hold = if g.enabled { g.max_hold } else { None };
+            self.dynamics
+                .validate(keys, hold)
+                .map_err(ConfigError::Dynamics)?;
+        }
         if g.enabled {
             let too_long = |d: Option<Duration>| d.is_some_and(|d| d > MAX_LIMIT);
             if too_long(g.max_hold)

@@ -119,6 +119,19 @@ impl<const B: usize> FingerFrame<B> {
         self.touched = Self::ALL;
     }
 
+    /// Takes `board` as written with its wanted outputs (by a write made elsewhere: the
+    /// interpreter's duty flush).
+    #[cfg(feature = "dynamics")]
+    pub(crate) fn mark_written(&mut self, board: usize) {
+        self.written[board] = self.outputs[board];
+    }
+
+    /// Forgets which boards were touched (after a flush that visited every board).
+    #[cfg(feature = "dynamics")]
+    pub(crate) fn untouch(&mut self) {
+        self.touched = 0;
+    }
+
     /// Writes every dirty board, in board order, one write each. Returns how many boards were
     /// written. On the first failure it stops; that board and the ones after it stay dirty.
     pub fn flush<O: FingerBoards>(

@@ -2,6 +2,7 @@
 
 use crate::config::{Config, ConfigError, ConfigSource, DutyLimit, GuardConfig, Overlap, Thesis};
 use crate::decoder::{Counters, Decoder};
+use crate::dynamics::Duty;
 use crate::fingers::{
     clamp_across, Fingers, AGE_CAP, DOWN, FOLDED, LATE, PENDING, RELEASE_AFTER, RELEASING,
 };
@@ -161,6 +162,9 @@ pub struct Interpreter<
     wake: Kept,
     #[cfg(feature = "stats")]
     stats: Stats,
+    /// The duties last written to each board by [`flush_duties`](Self::flush_duties).
+    #[cfg(feature = "dynamics")]
+    duties: [[Duty; 16]; B],
 }
 
 impl Interpreter<4, 61> {
@@ -232,6 +236,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             wake: Kept::NEVER,
             #[cfg(feature = "stats")]
             stats: NO_STATS,
+            #[cfg(feature = "dynamics")]
+            duties: [[Duty::OFF; 16]; B],
         }
     }
 }
@@ -352,8 +358,79 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     }
 
     /// Writes every board whose outputs changed. See [`FingerFrame::flush`].
+    ///
+    /// On/off outputs only: a robot with PWM boards flushes with
+    /// [`flush_duties`](Self::flush_duties).
     pub fn flush<O: FingerBoards>(&mut self, out: &mut O) -> Result<u8, FlushError<O::Error>> {
         self.frame.flush(&self.config.layout, out)
+    }
+
+    /// The duty `key` (0 = lowest key) is driven at now: its strike duty within the strike
+    /// time of its press, its hold duty after, 0 while it is not down (see
+    /// [`dynamics`](crate::dynamics)). [`Duty::FULL`] for a key down with on/off dynamics.
+    pub fn key_duty(&self, key: u8) -> Duty {
+        if (key as usize) >= K || self.fingers.phase(key) != DOWN {
+            return Duty::OFF;
+        }
+        #[cfg(feature = "dynamics")]
+        return self.config.dynamics.duty_at(
+            key,
+            self.velocity(key),
+            self.fingers.age(key, self.clock),
+        );
+        #[cfg(not(feature = "dynamics"))]
+        return Duty::FULL;
+    }
+
+    /// Every board's 16 duties now ([`key_duty`](Self::key_duty) of each key on its output; outputs
+    /// with no key are 0).
+    pub fn duties(&self) -> [[Duty; 16]; B] {
+        let mut all = [[Duty::OFF; 16]; B];
+        for key in 0..self.keys() {
+            if self.fingers.phase(key) != DOWN {
+                continue;
+            }
+            if let Some(f) = self.config.layout.finger(key) {
+                all[f.board as usize][f.bit as usize & 15] = self.key_duty(key);
+            }
+        }
+        all
+    }
+
+    /// Writes the duties of every board whose duties changed since the last write (a key
+    /// pressed, released, or moved from its strike to its hold), or that the frame says is
+    /// dirty (after [`FingerFrame::invalidate`]), one
+    /// [`write_duties`](FingerBoards::write_duties) each, in board order. Returns how many
+    /// boards were written. On the first failure it stops; that board and the ones after it
+    /// are written again by the next flush.
+    ///
+    /// For robots with PWM boards (needs the `dynamics` feature): call it where an on/off
+    /// robot calls [`flush`](Self::flush), and also at [`next_deadline`](Self::next_deadline),
+    /// which includes the end of each strike. On/off boards in the same set get their outputs
+    /// through `write_duties`'s default (a duty above 0 is on), exactly as `flush` gives them.
+    #[cfg(feature = "dynamics")]
+    pub fn flush_duties<O: FingerBoards>(
+        &mut self,
+        out: &mut O,
+    ) -> Result<u8, FlushError<O::Error>> {
+        let wanted = self.duties();
+        let mut n = 0;
+        for (board, duties) in wanted.iter().enumerate() {
+            if *duties == self.duties[board] && !self.frame.is_dirty(board) {
+                continue;
+            }
+            let id = BoardId {
+                index: board as u8,
+                address: self.config.layout.boards[board].address,
+            };
+            out.write_duties(id, duties)
+                .map_err(|error| FlushError { board: id, error })?;
+            self.duties[board] = *duties;
+            self.frame.mark_written(board);
+            n += 1;
+        }
+        self.frame.untouch();
+        Ok(n)
     }
 
     /// Feeds one received byte at time `now`.
@@ -638,6 +715,10 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                     if short {
                         limit = limit.min(min_press);
                     }
+                    let strike_end = self.strike_end(key);
+                    if age < strike_end {
+                        limit = limit.min(strike_end);
+                    }
                     if limit != u32::MAX {
                         soonest(limit - age);
                     }
@@ -651,6 +732,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 sink.note(NoteEvent::WaitOver { key });
                 let mut limit = hold.unwrap_or(u32::MAX);
                 limit = limit.min(self.duty_cut_after(key).unwrap_or(u32::MAX));
+                limit = limit.min(self.strike_end(key));
                 if self.fingers.has(key, RELEASE_AFTER) {
                     limit = limit.min(min_press);
                 }
@@ -766,9 +848,64 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         }
     }
 
+    /// How long after its press `key` (down or about to strike) moves from its strike duty to
+    /// a lower hold duty, in µs; `u32::MAX` if it does not (on/off, or no `dynamics`).
+    #[inline(always)]
+    fn strike_end(&self, key: u8) -> u32 {
+        #[cfg(feature = "dynamics")]
+        {
+            let d = &self.config.dynamics;
+            let touch = d.touch(key);
+            if touch.strike_duty(self.velocity(key)) != touch.hold {
+                return d.strike.as_micros();
+            }
+        }
+        let _ = key;
+        u32::MAX
+    }
+
+    /// Whether the keys' current differs from their count (some key plays below 100 %).
+    #[inline(always)]
+    #[cfg(feature = "dynamics")]
+    fn by_current(&self) -> bool {
+        !self.config.dynamics.is_on_off()
+    }
+
+    #[cfg(feature = "dynamics")]
+    /// The present current of every key down or waiting to strike, in 4095ths of one key at
+    /// full power (a waiting key counts its strike to come).
+    fn current(&self) -> u32 {
+        let mut sum = 0;
+        let mut from = 0;
+        while let Some(key) = self.fingers.next_timed(from) {
+            from = key + 1;
+            sum += self.key_current(key) as u32;
+        }
+        sum
+    }
+
+    #[cfg(feature = "dynamics")]
+    /// The current of one key down (its duty now) or waiting (its strike to come).
+    fn key_current(&self, key: u8) -> u16 {
+        match self.fingers.phase(key) {
+            DOWN => self.key_duty(key).get(),
+            PENDING => self
+                .config
+                .dynamics
+                .touch(key)
+                .strike_duty(self.velocity(key))
+                .get(),
+            _ => 0,
+        }
+    }
+
     /// How long after its press the duty limit cuts `key` (down), from its heat at the
-    /// press; `None` without a duty limit.
+    /// press; `None` without a duty limit, or if it never would (held below the duty).
     fn duty_cut_after(&self, key: u8) -> Option<u32> {
+        #[cfg(feature = "dynamics")]
+        if self.by_current() {
+            return self.duty_cut_after_by_energy(key);
+        }
         let d = self.duty()?;
         let (on, window) = (d.max_on.as_micros() as u64, d.window.as_micros() as u64);
         if on >= window {
@@ -778,6 +915,41 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         // Heat rises at (1 − on/window) while the key is down.
         let left = on.saturating_sub(heat);
         Some((left * window / (window - on)).min(u32::MAX as u64) as u32)
+    }
+
+    #[cfg(feature = "dynamics")]
+    /// [`duty_cut_after`](Self::duty_cut_after) with dynamics: the key heats at its strike
+    /// duty less the allowed duty for the strike time, then at its hold duty less it.
+    fn duty_cut_after_by_energy(&self, key: u8) -> Option<u32> {
+        let d = self.duty()?;
+        let (on, window) = (d.max_on.as_micros() as u128, d.window.as_micros() as u128);
+        let full = Duty::FULL.get() as u128;
+        let dynamics = &self.config.dynamics;
+        let touch = dynamics.touch(key);
+        let strike_duty = touch.strike_duty(self.velocity(key)).get() as u128;
+        let hold_duty = touch.hold.get() as u128;
+        let s = dynamics.strike.as_micros() as u128;
+        // Heat in µs at full power; rates in (µs of heat) per µs, as fractions over
+        // `full × window`: duty/full − on/window.
+        let heat = self.fingers.heat_ms(key) as u128 * 1000;
+        let allowed = on * full;
+        let left = on.saturating_sub(heat);
+        // The strike phase.
+        let strike_rate = (strike_duty * window).saturating_sub(allowed);
+        let reach = |left: u128, rate: u128| -> Option<u128> {
+            (rate > 0).then(|| (left * full * window).div_ceil(rate))
+        };
+        if let Some(t) = reach(left, strike_rate) {
+            if t <= s {
+                return Some(t.min(u32::MAX as u128) as u32);
+            }
+        }
+        // After the strike: the heat it left, then the hold.
+        let after = (heat * full * window + s * strike_duty * window).saturating_sub(s * allowed)
+            / (full * window);
+        let left = on.saturating_sub(after);
+        let hold_rate = (hold_duty * window).saturating_sub(allowed);
+        reach(left, hold_rate).map(|t| (s + t).min(u32::MAX as u128) as u32)
     }
 
     fn apply<S: NoteSink>(&mut self, message: Message, now: u32, sink: &mut S) {
@@ -884,6 +1056,22 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         }
         // A fresh strike, or a re-strike of a key that is down (by the pedal, by this very
         // note again, or by another note under `Overlap::Restrike`) or waiting.
+        #[cfg(feature = "dynamics")]
+        let over_budget = if self.by_current() {
+            // The budget is a current: every key's duty now, this strike's in place of the
+            // key's own if it is down or waiting.
+            let strike = self.config.dynamics.touch(key).strike_duty(velocity).get() as u32;
+            let rest = self.current()
+                - if busy {
+                    self.key_current(key) as u32
+                } else {
+                    0
+                };
+            g.enabled && rest + strike > g.max_keys_down as u32 * Duty::FULL.get() as u32
+        } else {
+            !busy && g.enabled && self.fingers.down + self.fingers.pending >= g.max_keys_down
+        };
+        #[cfg(not(feature = "dynamics"))]
         let over_budget =
             !busy && g.enabled && self.fingers.down + self.fingers.pending >= g.max_keys_down;
         if over_budget {
@@ -1034,7 +1222,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             let limit = g
                 .max_hold
                 .map_or(u32::MAX, Duration::as_micros)
-                .min(self.duty_cut_after(key).unwrap_or(u32::MAX));
+                .min(self.duty_cut_after(key).unwrap_or(u32::MAX))
+                .min(self.strike_end(key));
             if g.enabled && limit != u32::MAX {
                 self.due = self.due.min(now.wrapping_add(limit));
             }
@@ -1102,7 +1291,24 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// Releases `key` now if it is down.
     fn release_now(&mut self, key: u8, now: u32) {
         if self.fingers.phase(key) == DOWN {
-            if let Some(d) = self.duty() {
+            #[cfg(feature = "dynamics")]
+            let by_energy = self.duty().filter(|_| self.by_current());
+            #[cfg(not(feature = "dynamics"))]
+            let by_energy: Option<DutyLimit> = None;
+            if let Some(d) = by_energy {
+                // It heated by its energy (strike, then hold) and cooled at the allowed duty
+                // meanwhile; rounded up, to be safe.
+                let (on, window) = (d.max_on.as_micros() as u64, d.window.as_micros() as u64);
+                let down = self.fingers.age(key, now);
+                #[cfg(feature = "dynamics")]
+                let energy = self.config.dynamics.energy(key, self.velocity(key), down);
+                #[cfg(not(feature = "dynamics"))]
+                let energy = down as u64;
+                let cooled = down as u64 * on / window.max(1);
+                let heat =
+                    (self.fingers.heat_ms(key) as u64 * 1000 + energy).saturating_sub(cooled);
+                self.fingers.set_heat_ms(key, heat.div_ceil(1000));
+            } else if let Some(d) = self.duty() {
                 // It heated at (1 − duty) while it was down; rounded up, to be safe.
                 let (on, window) = (d.max_on.as_micros() as u64, d.window.as_micros() as u64);
                 let down = self.fingers.age(key, now) as u64;

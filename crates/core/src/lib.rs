@@ -17,6 +17,8 @@
 //!   [`NotePool`] on small MCUs).
 //! - [`NoteEvent`]: what became of each note (struck, waiting, joined, dropped and why),
 //!   handed to a [`NoteSink`] by the `*_with` methods as it is decided.
+//! - [`Dynamics`]: velocity as strike strength on PWM boards: each press a strike at the
+//!   velocity's duty on the key's curve ([`Touch`]), then a hold ([`dynamics`]).
 //! - [`FingerBoards`]: the one output trait, implemented by real boards (`orch-boards`), the
 //!   virtual robot and the [`Recording`] test double.
 //!
@@ -50,9 +52,10 @@
 //! | frame 18 (with its mask of the boards touched since the last flush), decoder 12 (28 with `stats`: its counters), clock 8, last input 4 and kept deadlines 10 (32-bit, see below), pedals and flags | ≈ 60 |
 //! | the configuration (none with a constant one: [`Thesis`]) | 68 |
 //! | the statistics and the decoder's counters (feature `stats`, off on the ATmega16) | 80 (+8 padding) |
+//! | dynamics (feature `dynamics`, off on the ATmega16): the configuration's per-key [`Touch`] table and strike time (772), the duties last written to 4 boards (128) | 900 |
 //! | `Interpreter<4, 61, NotePool<32>>` without `duty-limit` and `stats` | 616 |
 //! | **`Interpreter<4, 61, NotePool<32>, Thesis>` without `duty-limit` and `stats`: the ATmega16 build** | **544** |
-//! | **[`Interpreter`] with [`NoteTable`], the duty limit and the statistics: the host's** | **1232** |
+//! | **[`Interpreter`] with [`NoteTable`], the duty limit, the statistics and dynamics: the host's** | **2132** |
 //!
 //! AVR has no padding, so the ATmega16 figure is a few bytes lower (536). The [`Decoder`]
 //! alone takes 12 bytes (28 with `stats`).
@@ -79,6 +82,11 @@
 //!   dropped and abandoned ones ([`Counters`], 16 bytes and four 32-bit increments a byte).
 //!   Without it every count reads 0; the messages and the [`NoteEvent`]s, which carry the
 //!   same account note by note, are unchanged. The ATmega16 firmware builds without it.
+//! - `dynamics` (default): a press played as a profile of PWM duties, strike then hold, from
+//!   the note's velocity ([`Config::dynamics`], [`dynamics`], [`Interpreter::flush_duties`]),
+//!   and a guard that counts current and energy instead of keys. 900 bytes of RAM with a
+//!   configuration in RAM (its per-key table), 128 with a constant one. Without it every key
+//!   is on/off. The ATmega16 firmware builds without it.
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -86,6 +94,7 @@
 mod bits;
 mod config;
 mod decoder;
+pub mod dynamics;
 mod fingers;
 mod frame;
 mod held;
@@ -103,13 +112,14 @@ pub use config::{
     Config, ConfigError, ConfigSource, DutyLimit, GuardConfig, Overlap, Thesis, MAX_LIMIT,
 };
 pub use decoder::{Counters, Decoded, Decoder};
+pub use dynamics::{Duty, Dynamics, DynamicsError, Touch};
 pub use frame::{FingerFrame, FlushError};
 pub use held::{HeldNotes, NotePool, NoteTable};
 pub use interpreter::{Interpreter, KeyPhase, ACTIVE_SENSING_TIMEOUT};
 pub use keymap::{BoardSpan, Finger, KeyOf, KeyRange, Layout, OutOfRange};
 pub use message::Message;
 pub use outcome::{DropReason, Landing, NoteEvent, NoteSink};
-pub use output::{BoardId, FingerBoards};
+pub use output::{on_off, BoardId, FingerBoards};
 pub use recording::{Nack, Recording, Write};
 pub use stats::Stats;
 pub use time::{Duration, Instant};

@@ -1,14 +1,18 @@
 //! A recording test double for [`FingerBoards`]: keeps every write, allocation-free.
 
-use crate::output::{BoardId, FingerBoards};
+use crate::dynamics::Duty;
+use crate::output::{on_off, BoardId, FingerBoards};
 
 /// One recorded board write.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Write {
     /// The board written.
     pub board: BoardId,
-    /// The 16 outputs written.
+    /// The 16 outputs written (for a duty write: those with a duty above 0).
     pub outputs: u16,
+    /// The 16 duties, for a write of duties ([`FingerBoards::write_duties`]); `None` for an
+    /// on/off write.
+    pub duties: Option<[Duty; 16]>,
 }
 
 /// Records up to `CAP` writes and the latest outputs of up to 16 boards.
@@ -21,6 +25,7 @@ pub struct Recording<const CAP: usize> {
     len: usize,
     overflowed: usize,
     outputs: [u16; 16],
+    duties: [[Duty; 16]; 16],
     fail_address: Option<u8>,
 }
 
@@ -42,6 +47,7 @@ impl<const CAP: usize> Recording<CAP> {
             len: 0,
             overflowed: 0,
             outputs: [0; 16],
+            duties: [[Duty::OFF; 16]; 16],
             fail_address: None,
         }
     }
@@ -71,6 +77,12 @@ impl<const CAP: usize> Recording<CAP> {
         self.outputs[index as usize & 15]
     }
 
+    /// The last duties of board `index`'s outputs (an on/off write sets [`Duty::FULL`] or
+    /// [`Duty::OFF`]).
+    pub fn duties(&self, index: u8) -> [Duty; 16] {
+        self.duties[index as usize & 15]
+    }
+
     /// Forgets the recorded writes (the boards keep their outputs).
     pub fn clear(&mut self) {
         self.writes = [None; CAP];
@@ -88,12 +100,39 @@ impl<const CAP: usize> FingerBoards for Recording<CAP> {
     type Error = Nack;
 
     fn write_board(&mut self, board: BoardId, outputs: u16) -> Result<(), Nack> {
+        let mut duties = [Duty::OFF; 16];
+        for (n, d) in duties.iter_mut().enumerate() {
+            if outputs & (1 << n) != 0 {
+                *d = Duty::FULL;
+            }
+        }
+        self.record(board, duties, None)
+    }
+
+    fn write_duties(&mut self, board: BoardId, duties: &[Duty; 16]) -> Result<(), Nack> {
+        self.record(board, *duties, Some(*duties))
+    }
+}
+
+impl<const CAP: usize> Recording<CAP> {
+    fn record(
+        &mut self,
+        board: BoardId,
+        duties: [Duty; 16],
+        written: Option<[Duty; 16]>,
+    ) -> Result<(), Nack> {
         if self.fail_address == Some(board.address) {
             return Err(Nack(board.address));
         }
+        let outputs = on_off(&duties);
         self.outputs[board.index as usize & 15] = outputs;
+        self.duties[board.index as usize & 15] = duties;
         if self.len < CAP {
-            self.writes[self.len] = Some(Write { board, outputs });
+            self.writes[self.len] = Some(Write {
+                board,
+                outputs,
+                duties: written,
+            });
             self.len += 1;
         } else {
             self.overflowed += 1;

@@ -141,7 +141,8 @@ fn the_frame_on_its_own() {
                 index: 1,
                 address: 0x41
             },
-            outputs: 0x8000
+            outputs: 0x8000,
+            duties: None,
         }]
     );
     frame.clear();

@@ -39,10 +39,10 @@ proptest! {
         steps in timed_steps(80),
     ) {
         let hold = Duration::from_millis(50);
-        let config = Config {
+        let config = common::fit_strike(Config {
             guard: GuardConfig { max_hold: Some(hold), ..config.guard },
             ..config
-        };
+        }, Some(hold));
         let limit = hold.as_micros() as u64;
         let mut rig = Rig::new(config);
         let end = run_steps(&mut rig, &steps, |rig| no_finger_older_than(rig, limit));

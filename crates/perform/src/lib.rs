@@ -107,5 +107,6 @@ pub fn thesis_config() -> orch_core::Config<MAX_BOARDS> {
         sustain: t.sustain,
         overlap: t.overlap,
         guard: t.guard,
+        dynamics: t.dynamics,
     }
 }

@@ -24,8 +24,22 @@ pub(crate) fn config_error(e: ConfigError) -> RobotError {
         ConfigError::LimitTooLong => "guard".to_string(),
         ConfigError::NoKeysAllowed => "guard.max_keys_down".to_string(),
         ConfigError::BadDuty | ConfigError::DutyUnsupported => "guard.duty_max_on".to_string(),
+        ConfigError::Dynamics(d) => dynamics_field(d),
     };
     RobotError::field(field, e.to_string())
+}
+
+/// The field at fault when the core refuses the dynamics (the loader checks them first and
+/// names the `[[dynamics.key]]` entry; this is for a configuration changed after loading).
+fn dynamics_field(e: orch_core::DynamicsError) -> String {
+    use orch_core::DynamicsError as D;
+    match e {
+        D::CurveFalls { .. } => "dynamics.loudest",
+        D::HoldAboveStrike { .. } => "dynamics.hold",
+        D::SilentSoftest { .. } => "dynamics.softest",
+        D::StrikeLongerThanHold => "dynamics.strike",
+    }
+    .to_string()
 }
 
 #[derive(Deserialize, Default)]
@@ -487,6 +501,7 @@ impl File {
                 OverlapWord::Restrike => orch_core::Overlap::Restrike,
             },
             guard: guard(&self.guard)?,
+            dynamics: orch_core::Dynamics::ON_OFF,
         };
         config.validate(MAX_KEYS).map_err(config_error)?;
         Ok(Robot {

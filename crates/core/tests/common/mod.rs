@@ -471,23 +471,90 @@ pub fn any_config() -> impl Strategy<Value = Config<4>> {
         prop_oneof![3 => Just(0xFFFFu16), 1 => any::<u16>()],
         guard(),
         any::<bool>(),
+        dynamics(),
     )
-        .prop_map(|(drop, sustain, mask, guard, hold)| Config {
-            overlap: if hold {
-                orch_core::Overlap::Hold
-            } else {
-                orch_core::Overlap::Restrike
-            },
-            out_of_range: if drop {
-                orch_core::OutOfRange::Drop
-            } else {
-                orch_core::OutOfRange::Fold
-            },
-            sustain,
-            channels: orch_core::ChannelMask(mask),
-            guard,
-            ..Config::THESIS
+        .prop_map(|(drop, sustain, mask, guard, hold, dynamics)| {
+            #[cfg_attr(not(feature = "dynamics"), allow(unused_mut))]
+            let mut config = Config {
+                overlap: if hold {
+                    orch_core::Overlap::Hold
+                } else {
+                    orch_core::Overlap::Restrike
+                },
+                out_of_range: if drop {
+                    orch_core::OutOfRange::Drop
+                } else {
+                    orch_core::OutOfRange::Fold
+                },
+                sustain,
+                channels: orch_core::ChannelMask(mask),
+                guard,
+                ..Config::THESIS
+            };
+            #[cfg(feature = "dynamics")]
+            {
+                config.dynamics = dynamics;
+            }
+            #[cfg(not(feature = "dynamics"))]
+            let _ = dynamics;
+            fit_strike(config, guard.max_hold)
         })
+}
+
+/// Whether every key of `config` is on/off (always, without the `dynamics` feature).
+pub fn is_on_off(config: &Config<4>) -> bool {
+    #[cfg(feature = "dynamics")]
+    return config.dynamics.is_on_off();
+    #[cfg(not(feature = "dynamics"))]
+    return {
+        let _ = config;
+        true
+    };
+}
+
+/// On/off keys (as without dynamics), the PWM defaults, or a curve of its own for every key
+/// (drawn from a seed: softest 1..=4095, loudest at or above it, hold at or below it), with a
+/// strike time of 1..60 ms.
+pub fn dynamics() -> impl Strategy<Value = orch_core::Dynamics> {
+    use orch_core::{Duration, Duty, Dynamics, Touch};
+    (0u8..3, 1u32..60, any::<u64>()).prop_map(|(kind, strike, seed)| {
+        let mut d = match kind {
+            0 => Dynamics::ON_OFF,
+            _ => Dynamics::PWM,
+        };
+        d.strike = Duration::from_millis(strike);
+        if kind == 2 {
+            let mut x = seed | 1;
+            let mut next = |n: u64| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                x % n
+            };
+            for t in d.keys.iter_mut() {
+                let softest = 1 + next(4095) as u16;
+                let loudest = softest + next(4096 - softest as u64) as u16;
+                let hold = next(softest as u64 + 1) as u16;
+                *t = Touch {
+                    softest: Duty::new(softest).unwrap(),
+                    loudest: Duty::new(loudest).unwrap(),
+                    hold: Duty::new(hold).unwrap(),
+                };
+            }
+        }
+        d
+    })
+}
+
+/// `config` with its strike time cut to `max_hold`, as a valid configuration needs.
+#[cfg_attr(not(feature = "dynamics"), allow(unused_mut))]
+pub fn fit_strike(mut config: Config<4>, max_hold: Option<orch_core::Duration>) -> Config<4> {
+    #[cfg(feature = "dynamics")]
+    if let Some(h) = max_hold {
+        config.dynamics.strike = config.dynamics.strike.min(h);
+    }
+    let _ = max_hold;
+    config
 }
 
 /// A guard, on, with limits short enough to fire in a test.
