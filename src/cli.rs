@@ -24,7 +24,7 @@ pub enum Command {
     /// Say whether the robot can play a MIDI file, and what will go wrong, without playing it.
     Analyze(AnalyzeArgs),
     /// Print the default robot configuration (robot.toml), commented.
-    Config,
+    Config(ConfigArgs),
     /// Follow a conductor's baton (a red LED at its tip) in a video and print each beat.
     Baton(BatonArgs),
     /// Play live MIDI on the robot: bytes in (serial, raw MIDI, UDP, stdin), the interpreter
@@ -222,4 +222,13 @@ pub struct ConductArgs {
 pub enum FollowMode {
     Immediate,
     Phase,
+}
+
+/// `orch config`.
+#[derive(Debug, clap::Args)]
+pub struct ConfigArgs {
+    /// The kind of finger boards: pca9555 (on/off, the thesis's; tca9555 is the same) or
+    /// pca9685 (PWM: velocity as strike strength), four of them for the 61-key robot.
+    #[arg(long, value_name = "KIND", default_value = "pca9555", value_parser = ["pca9555", "tca9555", "pca9685"])]
+    pub boards: String,
 }

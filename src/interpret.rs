@@ -8,7 +8,8 @@
 
 use std::io::{self, BufWriter, Write};
 
-use orch_core::{BoardId, FingerBoards, Instant};
+use orch_core::{BoardId, Duty, FingerBoards, Instant};
+use orch_robot::BoardKind;
 use serde_json::json;
 
 use crate::cli::{InterpretArgs, OnOff};
@@ -24,6 +25,17 @@ struct Printer<W: Write> {
     json: bool,
     t: Instant,
     byte: Option<u64>,
+    /// What each board is (by index): PWM boards print their duties.
+    kinds: Vec<BoardKind>,
+}
+
+impl<W: Write> Printer<W> {
+    fn cause(&self) -> String {
+        match self.byte {
+            Some(i) => format!("byte {i}"),
+            None => "timer".to_string(),
+        }
+    }
 }
 
 impl<W: Write> FingerBoards for Printer<W> {
@@ -34,10 +46,7 @@ impl<W: Write> FingerBoards for Printer<W> {
             let line = json!({"t_us": self.t.as_micros(), "byte": self.byte, "address": board.address, "outputs": outputs});
             writeln!(self.out, "{line}")
         } else {
-            let cause = match self.byte {
-                Some(i) => format!("byte {i}"),
-                None => "timer".to_string(),
-            };
+            let cause = self.cause();
             let fingers: String = (0..16)
                 .map(|b| if outputs & (1 << b) != 0 { '#' } else { '.' })
                 .collect();
@@ -48,6 +57,42 @@ impl<W: Write> FingerBoards for Printer<W> {
                 board.address
             )
         }
+    }
+
+    fn write_duties(&mut self, board: BoardId, duties: &[Duty; 16]) -> io::Result<()> {
+        if self.kinds.get(board.index as usize) != Some(&BoardKind::Pwm) {
+            return self.write_board(board, orch_core::on_off(duties));
+        }
+        let values: Vec<u16> = duties.iter().map(|d| d.get()).collect();
+        if self.json {
+            let line = json!({"t_us": self.t.as_micros(), "byte": self.byte, "address": board.address, "duty": values});
+            writeln!(self.out, "{line}")
+        } else {
+            let cause = self.cause();
+            writeln!(
+                self.out,
+                "{:>11.3} ms  {cause:<11} {:#04x} <- duty {}",
+                self.t.as_micros() as f64 / 1000.0,
+                board.address,
+                duty_text(duties)
+            )
+        }
+    }
+}
+
+/// A PWM board's duties as people read them: each output that is on, with its duty in per
+/// cent ("8:100% 12:35%"), or "all off".
+fn duty_text(duties: &[Duty; 16]) -> String {
+    let on: Vec<String> = duties
+        .iter()
+        .enumerate()
+        .filter(|(_, d)| d.get() > 0)
+        .map(|(n, d)| format!("{n}:{:.0}%", d.percent()))
+        .collect();
+    if on.is_empty() {
+        "all off".to_string()
+    } else {
+        on.join(" ")
     }
 }
 
@@ -90,6 +135,16 @@ pub fn run(args: &InterpretArgs) -> anyhow::Result<()> {
         json: args.source.json,
         t: Instant::ZERO,
         byte: None,
+        kinds: robot.kinds.clone(),
+    };
+    // A robot with PWM boards is written duties (strike, then hold); on/off boards their bits.
+    let pwm = robot.has_dynamics();
+    let flush = |interp: &mut crate::robot::HostInterpreter, printer: &mut Printer<_>| {
+        if pwm {
+            interp.flush_duties(printer).map_err(|e| e.error)
+        } else {
+            interp.flush(printer).map_err(|e| e.error)
+        }
     };
     let mut index: u64 = 0;
     input::for_each_chunk(&args.source, |bytes| {
@@ -100,7 +155,7 @@ pub fn run(args: &InterpretArgs) -> anyhow::Result<()> {
                 interp.tick(due);
                 printer.t = due;
                 printer.byte = None;
-                interp.flush(&mut printer).map_err(|e| e.error)?;
+                flush(&mut interp, &mut printer)?;
                 if interp.next_deadline() == Some(due) {
                     break;
                 }
@@ -108,7 +163,7 @@ pub fn run(args: &InterpretArgs) -> anyhow::Result<()> {
             interp.feed(byte, now);
             printer.t = now;
             printer.byte = Some(index);
-            interp.flush(&mut printer).map_err(|e| e.error)?;
+            flush(&mut interp, &mut printer)?;
             index += 1;
         }
         printer.out.flush()?;
@@ -119,11 +174,20 @@ pub fn run(args: &InterpretArgs) -> anyhow::Result<()> {
     let layout = &interp.config().layout;
     let boards = &layout.boards[..robot.boards];
     let mut out = printer.out;
+    let duties = interp.duties();
+    let is_pwm = |i: usize| robot.kinds.get(i) == Some(&BoardKind::Pwm);
     if args.source.json {
         let list: Vec<_> = boards
             .iter()
             .enumerate()
-            .map(|(i, b)| json!({"address": b.address, "outputs": interp.frame().outputs(i)}))
+            .map(|(i, b)| {
+                if is_pwm(i) {
+                    let values: Vec<u16> = duties[i].iter().map(|d| d.get()).collect();
+                    json!({"address": b.address, "outputs": interp.frame().outputs(i), "duty": values})
+                } else {
+                    json!({"address": b.address, "outputs": interp.frame().outputs(i)})
+                }
+            })
             .collect();
         writeln!(out, "{}", json!({"type": "final", "boards": list}))?;
     } else {
@@ -161,7 +225,13 @@ pub fn run(args: &InterpretArgs) -> anyhow::Result<()> {
         let finals: Vec<String> = boards
             .iter()
             .enumerate()
-            .map(|(i, b)| format!("{:#04x}={:#06x}", b.address, interp.frame().outputs(i)))
+            .map(|(i, b)| {
+                if is_pwm(i) {
+                    format!("{:#04x}=[{}]", b.address, duty_text(&duties[i]))
+                } else {
+                    format!("{:#04x}={:#06x}", b.address, interp.frame().outputs(i))
+                }
+            })
             .collect();
         writeln!(out, "# final: {}", finals.join(" "))?;
     }

@@ -30,7 +30,7 @@ pub fn run(command: cli::Command) -> anyhow::Result<()> {
         cli::Command::Interpret(args) => interpret::run(&args),
         cli::Command::Play(args) => play::run_play(&args),
         cli::Command::Analyze(args) => play::run_analyze(&args),
-        cli::Command::Config => robot::print_default(),
+        cli::Command::Config(args) => robot::print_default(&args.boards),
         cli::Command::Baton(args) => baton::run(&args),
         cli::Command::Run(args) => run::run(&args),
         cli::Command::Conduct(args) => conduct::run(&args),

@@ -34,11 +34,26 @@ pub fn load_song(path: &Path) -> anyhow::Result<Song> {
     })
 }
 
+/// Loads the robot for a performance (`play`, `analyze`, `conduct`, `run`).
+///
+/// A robot with PCA9685 (PWM) boards is refused here for now: robot.toml reads and checks
+/// them and `orch interpret` writes their duties, but the performer and the virtual robot
+/// drive only on/off boards so far, and a performance that quietly played a PWM robot as an
+/// on/off one would report what did not happen.
 pub fn load_robot(path: Option<&Path>) -> anyhow::Result<Robot> {
-    match path {
-        Some(p) => Ok(Robot::load(p)?),
-        None => Ok(Robot::thesis()),
+    let robot = match path {
+        Some(p) => Robot::load(p)?,
+        None => Robot::thesis(),
+    };
+    if robot.has_dynamics() {
+        return Err(bad_input(format!(
+            "{}: PCA9685 (PWM) boards are not played yet: `orch interpret` writes their \
+             duties, but the performer and the virtual robot drive PCA9555/TCA9555 boards only; \
+             use kind = \"pca9555\" here",
+            path.map_or("robot".into(), |p| p.display().to_string())
+        )));
     }
+    Ok(robot)
 }
 
 /// The tempo factors `--tempo` takes: a twentieth to twenty times as written.

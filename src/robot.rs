@@ -5,10 +5,16 @@
 
 pub use orch_robot::{HostInterpreter, Robot, RobotError, DEFAULT_TOML, MAX_BOARDS, MAX_KEYS};
 
-/// `orch config`: prints the default configuration, commented.
-pub fn print_default() -> anyhow::Result<()> {
+/// `orch config [--boards KIND]`: prints the default configuration for that kind of board,
+/// commented.
+pub fn print_default(boards: &str) -> anyhow::Result<()> {
     use std::io::Write;
+    let kind = if boards == "pca9685" {
+        orch_robot::BoardKind::Pwm
+    } else {
+        orch_robot::BoardKind::OnOff
+    };
     let mut out = std::io::stdout().lock();
-    out.write_all(DEFAULT_TOML.as_bytes())?;
+    out.write_all(orch_robot::default_toml(kind).as_bytes())?;
     Ok(())
 }

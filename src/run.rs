@@ -501,7 +501,9 @@ impl Runner {
             eprintln!("orch: SIGHUP: no --robot file to read again; the thesis's robot stays");
             return;
         };
-        match Robot::load(&path).and_then(|r| r.interpreter().map(|_| r)) {
+        match crate::play::load_robot(Some(&path))
+            .and_then(|r| r.interpreter().map(|_| r).map_err(anyhow::Error::from))
+        {
             Err(e) => eprintln!(
                 "orch: SIGHUP: {} refused, the robot stays as it was: {e}",
                 path.display()

@@ -407,6 +407,60 @@ fn config_prints_a_commented_default_that_reads_back() {
     assert_eq!(json_lines(&out.stdout)[0]["address"], 0x24);
 }
 
+#[test]
+fn config_for_pca9685_boards_reads_back_and_interpret_writes_their_duties() {
+    let out = orch()
+        .args(["config", "--boards", "pca9685"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let dir = std::env::temp_dir().join(format!("orch-config-pwm-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("robot.toml");
+    std::fs::write(&file, text.as_bytes()).unwrap();
+    // Middle C at 127, D at 1, C released: one write of duties to the one board each time.
+    let out = orch()
+        .args(["interpret", "--hex", "--json", "--robot"])
+        .arg(&file)
+        .write_stdin("90 3C 7F 3E 01 80 3C 00")
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let lines = json_lines(&out.stdout);
+    let duty = |i: usize| -> Vec<u64> {
+        lines[i]["duty"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap())
+            .collect()
+    };
+    // Key 24 (board 1 at 0x41, output 8) and key 26 (output 10).
+    assert_eq!(lines[0]["address"], 0x41);
+    assert_eq!(duty(0)[8], 4095, "velocity 127: the loudest, 100 %");
+    assert_eq!(duty(1)[10], 1843, "velocity 1: the softest, 45 %");
+    assert_eq!(duty(2)[8], 0);
+    assert_eq!(duty(2)[10], 1843);
+    assert_eq!(lines[3]["type"], "final");
+    // The performer does not drive PWM boards yet: refused, saying so, exit 2.
+    let out = orch()
+        .args(["play", "--fast", "--robot"])
+        .arg(&file)
+        .arg("examples/ode-to-joy.mid")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("PCA9685"));
+    // And the on/off default is unchanged by the flag's default.
+    let plain = orch().arg("config").output().unwrap();
+    let named = orch()
+        .args(["config", "--boards", "pca9555"])
+        .output()
+        .unwrap();
+    assert_eq!(plain.stdout, named.stdout);
+}
+
 fn corpus(name: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../shared/midi")

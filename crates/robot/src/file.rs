@@ -7,7 +7,7 @@ use orch_core::{
 use orch_sim::{BusClock, KeyMechanics, MechanicsConfig};
 use serde::Deserialize;
 
-use crate::{Robot, RobotError, MAX_BOARDS, MAX_KEYS};
+use crate::{BoardKind, Robot, RobotError, MAX_BOARDS, MAX_KEYS};
 
 /// Parses and checks a configuration.
 pub(crate) fn parse(text: &str) -> Result<Robot, RobotError> {
@@ -54,6 +54,55 @@ struct File {
     mechanics: Mechanics,
     #[serde(default)]
     guard: Guard,
+    #[serde(default)]
+    pwm: Pwm,
+    #[serde(default)]
+    dynamics: DynamicsFile,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct Pwm {
+    frequency: String,
+}
+
+impl Default for Pwm {
+    fn default() -> Self {
+        Self {
+            frequency: format!("{}Hz", crate::DEFAULT_PWM_HZ),
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct DynamicsFile {
+    strike: String,
+    softest: String,
+    loudest: String,
+    hold: String,
+    key: Vec<KeyTouch>,
+}
+
+impl Default for DynamicsFile {
+    fn default() -> Self {
+        Self {
+            strike: "40ms".into(),
+            softest: "45%".into(),
+            loudest: "100%".into(),
+            hold: "35%".into(),
+            key: Vec::new(),
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KeyTouch {
+    note: i64,
+    softest: Option<String>,
+    loudest: Option<String>,
+    hold: Option<String>,
 }
 
 // Integers are read as TOML's own i64 and checked here, so that a value out of range is
@@ -102,10 +151,21 @@ enum Policy {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Board {
+    #[serde(default)]
+    kind: KindWord,
     address: i64,
     keys: i64,
     #[serde(default)]
     first_bit: i64,
+}
+
+#[derive(Deserialize, Clone, Copy, Default, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+enum KindWord {
+    #[default]
+    Pca9555,
+    Tca9555,
+    Pca9685,
 }
 
 #[derive(Deserialize)]
@@ -389,24 +449,28 @@ fn guard(g: &Guard) -> Result<GuardConfig, RobotError> {
 }
 
 /// Reads `[[boards]]`, or the thesis's four boards if there are none.
-fn boards(list: Option<&[Board]>) -> Result<(Layout<MAX_BOARDS>, usize), RobotError> {
+fn boards(list: Option<&[Board]>) -> Result<(Layout<MAX_BOARDS>, Vec<BoardKind>), RobotError> {
     const THESIS: [Board; 4] = [
         Board {
+            kind: KindWord::Pca9555,
             address: 0x21,
             keys: 16,
             first_bit: 0,
         },
         Board {
+            kind: KindWord::Pca9555,
             address: 0x22,
             keys: 16,
             first_bit: 0,
         },
         Board {
+            kind: KindWord::Pca9555,
             address: 0x23,
             keys: 16,
             first_bit: 0,
         },
         Board {
+            kind: KindWord::Pca9555,
             address: 0x24,
             keys: 13,
             first_bit: 0,
@@ -461,7 +525,14 @@ fn boards(list: Option<&[Board]>) -> Result<(Layout<MAX_BOARDS>, usize), RobotEr
             first_bit,
         };
     }
-    Ok((Layout { boards: spans }, boards.len()))
+    let kinds = boards
+        .iter()
+        .map(|b| match b.kind {
+            KindWord::Pca9555 | KindWord::Tca9555 => BoardKind::OnOff,
+            KindWord::Pca9685 => BoardKind::Pwm,
+        })
+        .collect();
+    Ok((Layout { boards: spans }, kinds))
 }
 
 impl File {
@@ -476,7 +547,7 @@ impl File {
             )
         })?;
         let channels = channels(&k.channels)?;
-        let (layout, boards) = boards(self.boards.as_deref())?;
+        let (layout, kinds) = boards(self.boards.as_deref())?;
         if layout.keys() != range.keys() {
             return Err(RobotError::field(
                 "boards",
@@ -487,6 +558,9 @@ impl File {
                 ),
             ));
         }
+        let guard = guard(&self.guard)?;
+        let dynamics = dynamics(&self.dynamics, range, &layout, &kinds, &guard)?;
+        let pwm_hz = pwm_frequency(&self.pwm.frequency)?;
         let config = Config {
             channels,
             range,
@@ -500,17 +574,187 @@ impl File {
                 OverlapWord::Hold => orch_core::Overlap::Hold,
                 OverlapWord::Restrike => orch_core::Overlap::Restrike,
             },
-            guard: guard(&self.guard)?,
-            dynamics: orch_core::Dynamics::ON_OFF,
+            guard,
+            dynamics,
         };
         config.validate(MAX_KEYS).map_err(config_error)?;
         Ok(Robot {
             config,
-            boards,
+            boards: kinds.len(),
+            kinds,
+            pwm_hz,
             clock: clock(&self.bus.clock)?,
             mechanics: mechanics(&self.mechanics, range)?,
         })
     }
+}
+
+/// What `pwm.frequency` accepts.
+fn pwm_help() -> String {
+    format!(
+        "the PCA9685 makes {}..={} Hz from its 25 MHz oscillator (PRE_SCALE 3..=255); write          it in Hz or kHz, such as \"1kHz\" or \"200Hz\"",
+        crate::PWM_HZ.start(),
+        crate::PWM_HZ.end()
+    )
+}
+
+/// Reads `pwm.frequency`: a frequency the PCA9685 can make.
+fn pwm_frequency(text: &str) -> Result<u32, RobotError> {
+    let t = text.trim().to_ascii_lowercase().replace(' ', "");
+    let hz = if let Some(k) = t.strip_suffix("khz") {
+        k.parse::<f64>().ok().map(|k| k * 1e3)
+    } else if let Some(h) = t.strip_suffix("hz") {
+        h.parse::<f64>().ok()
+    } else {
+        None
+    };
+    match hz.map(f64::round) {
+        Some(hz) if hz >= 1.0 && crate::PWM_HZ.contains(&(hz as u32)) => Ok(hz as u32),
+        _ => Err(RobotError::field(
+            "pwm.frequency",
+            format!("{text:?}: {}", pwm_help()),
+        )),
+    }
+}
+
+/// Parses a duty written in per cent, "45%", 0..=100.
+fn duty(field: &str, text: &str) -> Result<orch_core::Duty, RobotError> {
+    let t = text.trim();
+    let Some(number) = t.strip_suffix('%') else {
+        return Err(RobotError::field(
+            field,
+            format!("{text:?}: write a duty in per cent of full power, such as \"45%\""),
+        ));
+    };
+    let value: f32 = number
+        .trim()
+        .parse()
+        .map_err(|_| RobotError::field(field, format!("{text:?}: {number:?} is not a number")))?;
+    orch_core::Duty::from_percent(value).ok_or_else(|| {
+        RobotError::field(
+            field,
+            format!("{text:?}: a duty is 0% to 100% of full power"),
+        )
+    })
+}
+
+/// Reads `[dynamics]` and its `[[dynamics.key]]` entries: keys on PWM boards get their
+/// touch, keys on on/off boards [`Touch::FULL`](orch_core::Touch::FULL).
+fn dynamics(
+    d: &DynamicsFile,
+    range: KeyRange,
+    layout: &Layout<MAX_BOARDS>,
+    kinds: &[BoardKind],
+    guard: &GuardConfig,
+) -> Result<orch_core::Dynamics, RobotError> {
+    use orch_core::{Dynamics, Touch};
+    let strike = delay("dynamics.strike", &d.strike)?;
+    if strike == Duration::ZERO {
+        return Err(RobotError::field(
+            "dynamics.strike",
+            "\"0ms\": a strike needs time to throw the hammer; give a duration such as \"40ms\"",
+        ));
+    }
+    // The strike time matters only where a board plays it.
+    let any_pwm = kinds.contains(&BoardKind::Pwm);
+    if let Some(hold) = guard.max_hold.filter(|_| guard.enabled && any_pwm) {
+        if strike > hold {
+            return Err(RobotError::field(
+                "dynamics.strike",
+                format!(
+                    "{:?} is longer than guard.max_hold: the hold limit would cut every \
+                     strike; make it shorter",
+                    d.strike
+                ),
+            ));
+        }
+    }
+    let default = Touch {
+        softest: duty("dynamics.softest", &d.softest)?,
+        loudest: duty("dynamics.loudest", &d.loudest)?,
+        hold: duty("dynamics.hold", &d.hold)?,
+    };
+    check_touch(&default, "dynamics.")?;
+    let (low, high) = (range.low().get(), range.high().get());
+    let mut keys = [default; 128];
+    for (i, k) in d.key.iter().enumerate() {
+        let field = |name: &str| format!("dynamics.key[{i}].{name}");
+        if !(i64::from(low)..=i64::from(high)).contains(&k.note) {
+            return Err(RobotError::field(
+                field("note"),
+                format!(
+                    "{} is out of range: the robot has keys for notes {low}..={high} only",
+                    k.note
+                ),
+            ));
+        }
+        if let Some(j) = d.key[..i].iter().position(|o| o.note == k.note) {
+            return Err(RobotError::field(
+                field("note"),
+                format!(
+                    "note {} is already given in dynamics.key[{j}]; list each key once",
+                    k.note
+                ),
+            ));
+        }
+        let mut t = default;
+        if let Some(x) = &k.softest {
+            t.softest = duty(&field("softest"), x)?;
+        }
+        if let Some(x) = &k.loudest {
+            t.loudest = duty(&field("loudest"), x)?;
+        }
+        if let Some(x) = &k.hold {
+            t.hold = duty(&field("hold"), x)?;
+        }
+        check_touch(&t, &format!("dynamics.key[{i}]."))?;
+        keys[(k.note as u8 - low) as usize] = t;
+    }
+    // Keys on on/off boards play at full power whatever the velocity.
+    for (key, t) in keys.iter_mut().enumerate() {
+        let pwm = (key < range.keys())
+            .then(|| layout.finger(key as u8))
+            .flatten()
+            .is_some_and(|f| kinds.get(f.board as usize) == Some(&BoardKind::Pwm));
+        if !pwm {
+            *t = Touch::FULL;
+        }
+    }
+    Ok(Dynamics { strike, keys })
+}
+
+/// Refuses a touch whose curve falls, whose hold is above its softest strike, or whose softest
+/// strike is silence; `prefix` names its table.
+fn check_touch(t: &orch_core::Touch, prefix: &str) -> Result<(), RobotError> {
+    let pct = |d: orch_core::Duty| format!("{:.1}%", d.percent());
+    if t.softest == orch_core::Duty::OFF {
+        return Err(RobotError::field(
+            format!("{prefix}softest"),
+            "0%: velocity 1 would make no sound; give the softest duty that still sounds",
+        ));
+    }
+    if t.loudest < t.softest {
+        return Err(RobotError::field(
+            format!("{prefix}loudest"),
+            format!(
+                "{} is below softest = {}: the velocity curve would fall (louder notes struck \
+                 softer)",
+                pct(t.loudest),
+                pct(t.softest)
+            ),
+        ));
+    }
+    if t.hold > t.softest {
+        return Err(RobotError::field(
+            format!("{prefix}hold"),
+            format!(
+                "{} is above softest = {}: a hold must not push harder than the softest strike",
+                pct(t.hold),
+                pct(t.softest)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Reads `[mechanics]` and its `[[mechanics.key]]` entries, one at most per note.

@@ -35,6 +35,23 @@ pub const MAX_KEYS: usize = 128;
 /// The interpreter as the host runs it: room for any configuration.
 pub type HostInterpreter = Interpreter<MAX_BOARDS, MAX_KEYS>;
 
+/// The PCA9685's PWM frequency by default: 1 kHz. See `pwm.frequency` in [`DEFAULT_TOML`].
+pub const DEFAULT_PWM_HZ: u32 = 1_000;
+
+/// The PWM frequencies a PCA9685 makes from its internal 25 MHz oscillator: PRE_SCALE =
+/// round(25 MHz / (4096 × f)) − 1 must lie in 3..=255.
+pub const PWM_HZ: std::ops::RangeInclusive<u32> = 24..=1526;
+
+/// What a finger board drives its 16 outputs with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BoardKind {
+    /// On or off: a PCA9555 or TCA9555 I/O expander. Velocity is ignored.
+    OnOff,
+    /// A PWM duty per output: a PCA9685. Velocity is strike strength (see
+    /// [`orch_core::dynamics`]).
+    Pwm,
+}
+
 /// A robot: the interpreter's configuration, how many of the boards are real, the bus clock
 /// and the keys' mechanics.
 #[derive(Clone, Debug)]
@@ -44,6 +61,10 @@ pub struct Robot {
     pub config: Config<MAX_BOARDS>,
     /// How many finger boards the robot has (1..=[`MAX_BOARDS`]).
     pub boards: usize,
+    /// What each board is, in layout order (`boards` entries).
+    pub kinds: Vec<BoardKind>,
+    /// The PWM frequency of the PCA9685 boards, Hz (in [`PWM_HZ`]).
+    pub pwm_hz: u32,
     /// The I2C bus clock to the boards.
     pub clock: BusClock,
     /// How the keys move: press and release delays, shortest pulse that sounds.
@@ -88,6 +109,12 @@ impl Robot {
         self.clock.nanos_for_bits(38) as f64 / 1000.0
     }
 
+    /// Whether any board is a PWM board: the robot is then flushed with
+    /// [`Interpreter::flush_duties`](orch_core::Interpreter::flush_duties).
+    pub fn has_dynamics(&self) -> bool {
+        self.kinds.contains(&BoardKind::Pwm)
+    }
+
     /// An interpreter for this robot.
     ///
     /// A robot read by [`Robot::from_toml`] always has one; a robot whose fields were changed
@@ -117,24 +144,31 @@ sustain = false
 # note makes no sound of its own. Restrike by default: the ear follows onsets.
 overlap = "restrike"
 
-# The finger boards (PCA9555 or TCA9555), in key order: each drives `keys` consecutive keys
-# (1 to 16) from output bit `first_bit` (bits 0-7 are port 0, 8-15 port 1).
+# The finger boards, in key order: each drives `keys` consecutive keys (1 to 16) from output
+# `first_bit` (bits 0-7 are port 0, 8-15 port 1). kind: "pca9555" (or "tca9555"): on/off
+# outputs, velocity ignored; "pca9685": 16 PWM outputs, velocity played as strike strength
+# (see [dynamics]). A robot may mix kinds. `orch config --boards pca9685` prints this file
+# for four PCA9685 boards.
 [[boards]]
+kind = "pca9555"
 address = 0x21
 keys = 16
 first_bit = 0
 
 [[boards]]
+kind = "pca9555"
 address = 0x22
 keys = 16
 first_bit = 0
 
 [[boards]]
+kind = "pca9555"
 address = 0x23
 keys = 16
 first_bit = 0
 
 [[boards]]
+kind = "pca9555"
 address = 0x24
 keys = 13
 first_bit = 0
@@ -142,6 +176,7 @@ first_bit = 0
 # The I2C bus to the boards: "83.33kHz" (the thesis's board), "100kHz", "400kHz" or "1MHz"
 # (any clock from 1 kHz to 1 MHz, written in Hz, kHz or MHz).
 # The PCA9555 and TCA9555 are rated for 400 kHz: a board write then takes 95 us, not 456 us.
+# The PCA9685 runs up to 1 MHz (Fast-mode Plus).
 [bus]
 clock = "400kHz"
 
@@ -169,4 +204,48 @@ watchdog = "4s"           # release every key after this long without a byte (mo
 late_limit = "30ms"       # a re-strike that would sound later than this is dropped (too fast)
 duty_window = "60s"       # the duty limit: a key may be energised at most duty_max_on
 duty_max_on = "30s"       #   in any duty_window ("off": no duty limit)
+# With PCA9685 boards, the power budget and the duty limit count energy: max_keys_down is a
+# current (keys at full power; a key holding at 35 % counts 0.35), and a key heats by its duty.
+
+# The PCA9685 boards' PWM frequency: 24 Hz to 1526 Hz (what the chip makes from its 25 MHz
+# oscillator). Low frequencies click audibly at a hold duty (75 Hz did on an open player
+# piano); at these frequencies a MOSFET's switching losses are negligible, but each step up
+# shortens the pulses a slow driver stage must follow. 1 kHz: no click, well inside the range.
+[pwm]
+frequency = "1kHz"
+
+# Dynamics, for keys on PCA9685 boards (keys on PCA9555 boards play at full power). A press is
+# a strike at a duty chosen by velocity, for `strike`, then a hold until the release: velocity
+# 1 strikes at `softest` (the softest duty that still sounds: never silence), 127 at
+# `loudest`, linearly in between. Duties in per cent of full power. The defaults are the open
+# player pianos' (strike 18 ms full + 20-45 ms at velocity, hold at 35 %). Keys that differ are
+# listed by note, each note once. Refused: a curve that falls (loudest below softest), a hold
+# above softest, a duty over 100 %, a strike longer than guard.max_hold.
+[dynamics]
+strike = "40ms"
+softest = "45%"
+loudest = "100%"
+hold = "35%"
+# [[dynamics.key]]
+# note = 36
+# softest = "55%"
 "#;
+
+/// The default configuration with every board of the `kind` given: [`DEFAULT_TOML`] for
+/// on/off boards; for PWM boards, four PCA9685 boards at 0x40..=0x43 (the chip's first
+/// addresses) driving the same 61 keys (16/16/16/13). What `orch config --boards` prints.
+pub fn default_toml(kind: BoardKind) -> String {
+    match kind {
+        BoardKind::OnOff => DEFAULT_TOML.to_string(),
+        BoardKind::Pwm => {
+            let mut text = DEFAULT_TOML.replace("kind = \"pca9555\"", "kind = \"pca9685\"");
+            for (from, to) in [(0x21, 0x40), (0x22, 0x41), (0x23, 0x42), (0x24, 0x43)] {
+                text = text.replace(
+                    &format!("address = {from:#04x}"),
+                    &format!("address = {to:#04x}"),
+                );
+            }
+            text
+        }
+    }
+}
