@@ -685,6 +685,17 @@ mod tests {
     }
 
     #[test]
+    fn of_two_boards_at_one_address_the_first_attached_answers() {
+        let mut bus = VirtualBus::default();
+        bus.attach(Pca9685::new(0x21));
+        bus.attach(Pca9555::new(0x21));
+        bus.write(0x21, &[0x00, 0x20]).unwrap(); // MODE1 of the PCA9685: awake
+        assert!(!bus.pca9685(0x21).unwrap().sleeping());
+        assert!(bus.device(0x21).is_none(), "the PCA9555 never answers");
+        assert_eq!(bus.devices()[0].configuration(), 0xFFFF);
+    }
+
+    #[test]
     fn adjacent_writes_are_one_frame() {
         let mut bus = VirtualBus::default();
         bus.attach(Pca9555::new(0x21));

@@ -40,8 +40,9 @@
 //! **Assumptions** (stated so tests can rely on them):
 //! - Outputs change when the whole transaction completes, at its STOP, for every write (the
 //!   chip does so with `OCH` = 0, this driver's setting; with `OCH` = 1 it would change at the
-//!   ACKs, at most a few bit-times earlier). The chip then applies a new ON/OFF at the next
-//!   PWM period: up to one period ([`Pca9685::period_nanos`]) after the STOP, not modelled.
+//!   ACKs, at most a few bit-times earlier). The chip then applies a new ON/OFF at the end of
+//!   the output's LOW time (data sheet 7.3.4): up to one period ([`Pca9685::period_nanos`])
+//!   after the STOP, not modelled.
 //! - The oscillator's 500 µs start-up after waking is not modelled: outputs run from the STOP
 //!   of the waking write. A driver must wait it anyway (`orch-boards` does).
 //! - A "held" channel after a wake without restart outputs nothing; the data sheet does not

@@ -17,8 +17,8 @@ pub(crate) const MODE1_SLEEP: [u8; 2] = [MODE1, SLEEP | AI];
 pub(crate) const MODE1_AWAKE: [u8; 2] = [MODE1, AI];
 /// `MODE1` awake with auto-increment, and a 1 in `RESTART`: restarts the channels a sleep held.
 pub(crate) const MODE1_RESTART: [u8; 2] = [MODE1, RESTART | AI];
-/// `MODE2`: totem-pole outputs (a MOSFET gate is driven both ways), not inverted, outputs
-/// change at the STOP (so a multi-channel write changes every channel at once), every output
+/// `MODE2`: totem-pole outputs (a MOSFET gate is driven both ways; the data sheet's table 11
+/// optimum for an N-type driver), not inverted, outputs change at the STOP (so a multi-channel write changes every channel at once), every output
 /// 0 while `OE` is high (`OUTNE` = 00).
 pub(crate) const MODE2_SETTING: [u8; 2] = [MODE2, OUTDRV];
 /// The command byte before a one-byte read of `MODE1`.

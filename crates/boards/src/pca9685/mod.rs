@@ -33,9 +33,10 @@
 //!      auto-increment is still off (as it is at power-up);
 //!   2. `[MODE1, SLEEP | AI]`: oscillator off (`PRE_SCALE` is writable only asleep);
 //!   3. `[PRE_SCALE, p]`;
-//!   4. `[MODE2, OUTDRV]`: totem-pole outputs for a MOSFET gate, not inverted, outputs change
-//!      at the STOP (every channel of one write changes at once), outputs 0 while the `OE`
-//!      pin is high (`OE` is the hardware stop);
+//!   4. `[MODE2, OUTDRV]`: totem-pole outputs, not inverted (the data sheet's table 11 calls
+//!      this the optimum for an external N-type driver, a low-side MOSFET: no pull-up needed),
+//!      outputs change at the STOP (every channel of one write changes at once), outputs 0
+//!      while the `OE` pin is high (`OE` is the hardware stop);
 //!   5. `[MODE1, AI]`: awake, auto-increment on, no sub or all-call addresses (each board
 //!      answers its own address only);
 //!   6. a wait of 500 µs ([`registers::OSCILLATOR_STARTUP_US`]) on the caller's `DelayNs`: the
@@ -69,6 +70,11 @@
 //! the mode and prescale registers. If `init` fails part-way the channels are still off (and the
 //! chip may be asleep); call it again.
 //!
+//! One case it cannot cover: a chip that other software left running with `MODE2`'s `INVRT`
+//! set outputs the inverse of full OFF, high, from step 1 until step 4 clears `INVRT` at the
+//! latest (three 29-bit writes: about 0.2 ms at 400 kHz). At power-up `MODE2` is 0x04 and this driver never sets `INVRT`; the
+//! `OE` pin held high over a re-initialisation covers even that case.
+//!
 //! # PWM frequency: the default is the highest, 1526 Hz
 //!
 //! The chip makes `25 MHz / (4096 × (PRE_SCALE + 1))` with `PRE_SCALE` 3..=255: 1525.9 Hz down to
@@ -82,9 +88,9 @@
 //!   1526 Hz (0.66 ms) it ripples around its mean, and what is left is 20× higher in frequency,
 //!   where a plunger and key's mass follows it about 400× less (displacement goes as
 //!   force / ω²).
-//! - **Latency.** The chip takes a new ON/OFF count at the next period: a key change waits up
-//!   to one period after its STOP: 0.66 ms at 1526 Hz, 5 ms at the power-up 200 Hz, 13 ms at
-//!   75 Hz.
+//! - **Latency.** The chip applies a new ON/OFF count at the end of the output's LOW time
+//!   (data sheet 7.3.4, against glitches), so a key change waits up to one period after its
+//!   STOP: 0.66 ms at 1526 Hz, 5 ms at the power-up 200 Hz, 13 ms at 75 Hz.
 //! - **No loss of resolution.** Every frequency has the same 4096 counts.
 //! - **The cost, switching losses, stays small in this range.** The outputs source 10 mA, so a
 //!   logic-level MOSFET with 10 nC of gate charge switches in about 1 µs; at 24 V and 0.75 A
