@@ -83,5 +83,5 @@ mod set;
 
 pub use device::{Pca9555, Tca9555};
 pub use error::Error;
-pub use pca9685::Pca9685;
+pub use pca9685::{Pca9685, Pca9685Set};
 pub use set::FingerBoardSet;

@@ -185,3 +185,24 @@ fn reads_go_through_the_bus() {
         "MODE1 awake with AI, then MODE2 totem pole"
     );
 }
+
+#[test]
+fn four_pwm_boards_at_0x40_to_0x43_through_the_set() {
+    let mut bus = VirtualBus::new(BusClock::FAST);
+    for a in 0x40..=0x43 {
+        bus.attach(Pca9685::new(a));
+    }
+    let mut set = orch_boards::Pca9685Set::new(bus, [0x40, 0x41, 0x42, 0x43]);
+    set.init(1526, &mut Waits::default()).unwrap();
+    set.bus_mut().set_time(SimTime::from_millis(5));
+    set.set_duty(3, 12, 4095).unwrap();
+    set.set_duty(3, 12, 1434).unwrap(); // strike, then hold at 35 %
+    let mut bus = set.destroy();
+    let changes = bus.take_duty_changes();
+    assert_eq!(changes.len(), 2);
+    assert!(changes.iter().all(|c| c.address == 0x43));
+    assert_eq!(changes[0].time, SimTime::from_micros(5_140));
+    assert_eq!(changes[1].time, SimTime::from_micros(5_280));
+    assert_eq!(bus.pca9685(0x43).unwrap().duty(12), 1434);
+    assert!(bus.pca9685s().iter().take(3).all(|c| c.duties() == [0; 16]));
+}

@@ -48,30 +48,20 @@ impl<I2C: I2c> Pca9685<I2C> {
         prescale: Prescale,
         delay: &mut impl DelayNs,
     ) -> Result<(), Error<I2C::Error>> {
-        self.state = State::UNKNOWN;
-        self.i2c.write(self.address, &frames::ALL_OFF)?;
-        self.i2c.write(self.address, &frames::MODE1_SLEEP)?;
-        self.i2c.write(self.address, &frames::pre_scale(prescale))?;
-        self.i2c.write(self.address, &frames::MODE2_SETTING)?;
-        self.i2c.write(self.address, &frames::MODE1_AWAKE)?;
-        delay.delay_us(OSCILLATOR_STARTUP_US);
-        self.state.commit(0, &[0; CHANNELS]);
-        self.state.prescale = Some(prescale);
-        Ok(())
+        init(
+            &mut self.i2c,
+            self.address,
+            &mut self.state,
+            prescale,
+            delay,
+        )
     }
 
     /// Sets one channel's duty (0..=4095, see the [module notes](crate::pca9685#duty)) in one
     /// 5-byte write, unless the driver knows the channel already holds it. Returns whether it
     /// wrote. A channel past 15 or a duty past 4095 is refused, nothing written.
     pub fn set_duty(&mut self, channel: u8, duty: u16) -> Result<bool, Error<I2C::Error>> {
-        let Some(frame) = self.state.plan_duty(channel, duty)? else {
-            return Ok(false);
-        };
-        let c = usize::from(channel);
-        self.state.forget(c, c);
-        self.i2c.write(self.address, &frame)?;
-        self.state.commit(c, &[duty]);
-        Ok(true)
+        set_duty(&mut self.i2c, self.address, &mut self.state, channel, duty)
     }
 
     /// Sets all 16 duties (channel `n` is `duties[n]`) in ONE write covering the channels from
@@ -82,22 +72,13 @@ impl<I2C: I2c> Pca9685<I2C> {
     /// Two changed channels far apart cost the whole run between them: 0 and 15 take one
     /// 65-byte write (596 bit-times), against two [`set_duty`](Self::set_duty) writes of 56.
     pub fn set_duties(&mut self, duties: &[u16; CHANNELS]) -> Result<bool, Error<I2C::Error>> {
-        let Some((first, last, span)) = self.state.plan_duties(duties)? else {
-            return Ok(false);
-        };
-        self.state.forget(first, last);
-        self.i2c.write(self.address, span.bytes())?;
-        self.state.commit(first, &duties[first..=last]);
-        Ok(true)
+        set_duties(&mut self.i2c, self.address, &mut self.state, duties)
     }
 
     /// Every channel fully off in one 2-byte write (`[ALL_LED_OFF_H, 0x10]`), whatever the
     /// cache says. For stopping.
     pub fn all_off(&mut self) -> Result<(), Error<I2C::Error>> {
-        self.state.forget(0, CHANNELS - 1);
-        self.i2c.write(self.address, &frames::ALL_OFF)?;
-        self.state.commit(0, &[0; CHANNELS]);
-        Ok(())
+        all_off(&mut self.i2c, self.address, &mut self.state)
     }
 
     /// Puts the chip to sleep (`[MODE1, SLEEP | AI]`): oscillator off, every output off, the
@@ -168,4 +149,68 @@ impl<I2C: I2c> Pca9685<I2C> {
     pub fn destroy(self) -> I2C {
         self.i2c
     }
+}
+
+// One board's operations on a bus it does not own, shared by `Pca9685` and `Pca9685Set`.
+
+pub(super) fn init<I2C: I2c>(
+    i2c: &mut I2C,
+    address: u8,
+    state: &mut State,
+    prescale: Prescale,
+    delay: &mut impl DelayNs,
+) -> Result<(), Error<I2C::Error>> {
+    *state = State::UNKNOWN;
+    i2c.write(address, &frames::ALL_OFF)?;
+    i2c.write(address, &frames::MODE1_SLEEP)?;
+    i2c.write(address, &frames::pre_scale(prescale))?;
+    i2c.write(address, &frames::MODE2_SETTING)?;
+    i2c.write(address, &frames::MODE1_AWAKE)?;
+    delay.delay_us(OSCILLATOR_STARTUP_US);
+    state.commit(0, &[0; CHANNELS]);
+    state.prescale = Some(prescale);
+    Ok(())
+}
+
+pub(super) fn set_duty<I2C: I2c>(
+    i2c: &mut I2C,
+    address: u8,
+    state: &mut State,
+    channel: u8,
+    duty: u16,
+) -> Result<bool, Error<I2C::Error>> {
+    let Some(frame) = state.plan_duty(channel, duty)? else {
+        return Ok(false);
+    };
+    let c = usize::from(channel);
+    state.forget(c, c);
+    i2c.write(address, &frame)?;
+    state.commit(c, &[duty]);
+    Ok(true)
+}
+
+pub(super) fn set_duties<I2C: I2c>(
+    i2c: &mut I2C,
+    address: u8,
+    state: &mut State,
+    duties: &[u16; CHANNELS],
+) -> Result<bool, Error<I2C::Error>> {
+    let Some((first, last, span)) = state.plan_duties(duties)? else {
+        return Ok(false);
+    };
+    state.forget(first, last);
+    i2c.write(address, span.bytes())?;
+    state.commit(first, &duties[first..=last]);
+    Ok(true)
+}
+
+pub(super) fn all_off<I2C: I2c>(
+    i2c: &mut I2C,
+    address: u8,
+    state: &mut State,
+) -> Result<(), Error<I2C::Error>> {
+    state.forget(0, CHANNELS - 1);
+    i2c.write(address, &frames::ALL_OFF)?;
+    state.commit(0, &[0; CHANNELS]);
+    Ok(())
 }

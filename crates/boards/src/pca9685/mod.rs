@@ -3,6 +3,8 @@
 //!
 //! - [`Pca9685`] drives one chip on a blocking embedded-hal 1.0 bus; `asynch::Pca9685Async`
 //!   (feature `async`) is the same driver on embedded-hal-async, byte for byte.
+//! - [`Pca9685Set`] owns one blocking bus and `N` chips (a robot's PWM boards), each with its
+//!   own cache, writing the same bytes.
 //! - [`registers`] holds the data sheet's register map and bits, [`Prescale`] the PWM
 //!   frequency.
 //!
@@ -106,8 +108,10 @@
 mod device;
 pub(crate) mod frames;
 pub mod registers;
+mod set;
 
 pub use device::Pca9685;
+pub use set::Pca9685Set;
 
 use registers::{COUNTS, OSCILLATOR_HZ, PRE_SCALE_MAX, PRE_SCALE_MIN};
 
