@@ -535,10 +535,9 @@ impl VirtualBus {
         writes: impl IntoIterator<Item = Vec<u8>>,
     ) {
         let after = self.output(slot);
-        let (driven, duty) = match (after, slot) {
-            (Output::Pins(p), _) => (p, None),
-            (Output::Duties(d), Slot::Pwm(i)) => (self.pwm[i].driven(), Some(d)),
-            (Output::Duties(d), Slot::Io(_)) => (0, Some(d)), // not reached
+        let (driven, duty) = match slot {
+            Slot::Io(i) => (self.devices[i].driven(), None),
+            Slot::Pwm(i) => (self.pwm[i].driven(), Some(self.pwm[i].duties())),
         };
         if self.keep_log {
             for bytes in writes {
