@@ -206,3 +206,19 @@ fn four_pwm_boards_at_0x40_to_0x43_through_the_set() {
     assert_eq!(bus.pca9685(0x43).unwrap().duty(12), 1434);
     assert!(bus.pca9685s().iter().take(3).all(|c| c.duties() == [0; 16]));
 }
+
+#[test]
+fn a_pwm_write_logs_its_duties_and_a_pca9555_write_stays_as_it_was() {
+    let mut bus = bus(BusClock::FAST);
+    bus.attach(Pca9555::new(0x21));
+    bus.write(0x21, &[0x02, 0x01, 0x00]).unwrap();
+    let mut dev = ready(&mut bus);
+    dev.set_duty(1, 300).unwrap();
+    let io = serde_json::to_value(&bus.log()[0]).unwrap();
+    assert!(io.get("duty").is_none(), "{io}");
+    let pwm = serde_json::to_value(bus.log().last().unwrap()).unwrap();
+    let mut duty = [0u16; 16];
+    duty[1] = 300;
+    assert_eq!(pwm["duty"], serde_json::json!(duty));
+    assert_eq!(pwm["driven"], 2);
+}
