@@ -12,7 +12,9 @@
 //!   [`set_duties`](Pca9685::set_duties) (one write for a board's changed channels),
 //!   [`all_off`](Pca9685::all_off), [`sleep`](Pca9685::sleep), [`restart`](Pca9685::restart).
 //!   Its module notes give every byte, the duty mapping, the power-up story and why the default
-//!   frequency is 1526 Hz. [`Pca9685Set`] owns one bus and `N` PWM boards, a cache each.
+//!   frequency is 1526 Hz. [`Pca9685Set`] owns one bus and `N` PWM boards, a cache each; it
+//!   also implements [`orch_core::FingerBoards`] as on/off (a set bit is a channel fully on), a
+//!   separate adapter until the core plays strike and hold.
 //!
 //! # What goes on the wire
 //!

@@ -98,3 +98,40 @@ fn with_boards_takes_up_to_n() {
     assert!(Pca9685Set::<&mut Mock, 1>::with_boards(&mut bus, &[0x40, 0x41]).is_none());
     bus.done();
 }
+
+#[test]
+fn as_finger_boards_a_bit_is_a_channel_fully_on_or_off_in_one_write() {
+    use orch_core::{BoardId, FingerBoards};
+    let b1 = BoardId {
+        index: 1,
+        address: 0x41,
+    };
+    let mut set = initialised(&[
+        // Bits 2 and 4: channels 2..=4 in one run, 2 and 4 full ON, 3 (unchanged) full OFF.
+        Transaction::write(
+            0x41,
+            vec![
+                0x0E, 0x00, FULL, 0x00, 0x00, 0x00, 0x00, 0x00, FULL, 0x00, FULL, 0x00, 0x00,
+            ],
+        ),
+        Transaction::write(0x41, vec![0x0E, 0x00, 0x00, 0x00, FULL]), // bit 2 released
+    ]);
+    set.write_board(b1, 0b1_0100).unwrap();
+    set.write_board(b1, 0b1_0100).unwrap(); // unchanged: nothing
+    set.write_board(b1, 0b1_0000).unwrap();
+    assert_eq!(
+        set.write_board(
+            BoardId {
+                index: 1,
+                address: 0x40
+            },
+            1
+        ),
+        Err(Error::AddressMismatch {
+            index: 1,
+            expected: 0x41,
+            requested: 0x40
+        })
+    );
+    set.destroy().done();
+}

@@ -168,3 +168,32 @@ impl<I2C: I2c, const N: usize> Pca9685Set<I2C, N> {
         }
     }
 }
+
+/// On/off playing on PWM boards, for today's interpreter (velocity ignored, as on a PCA9555):
+/// bit `n` of `outputs` sets channel `n` fully on (duty [`FULL_ON`](super::FULL_ON)) or fully
+/// off. A separate adapter, not the PWM design: strike and hold profiles belong to the core.
+impl<I2C: I2c, const N: usize> orch_core::FingerBoards for Pca9685Set<I2C, N> {
+    type Error = Error<I2C::Error>;
+
+    /// One write of the run of channels that changed ([`set_duties`](Pca9685Set::set_duties)),
+    /// or none. `board.index` must be a board of the set ([`Error::UnknownBoard`]) and
+    /// `board.address` its address ([`Error::AddressMismatch`]).
+    fn write_board(&mut self, board: orch_core::BoardId, outputs: u16) -> Result<(), Self::Error> {
+        let i = self.slot(board.index)?;
+        if self.addresses[i] != board.address {
+            return Err(Error::AddressMismatch {
+                index: board.index,
+                expected: self.addresses[i],
+                requested: board.address,
+            });
+        }
+        let duties = core::array::from_fn(|n| {
+            if outputs & (1 << n) != 0 {
+                super::FULL_ON
+            } else {
+                0
+            }
+        });
+        self.set_duties(board.index, &duties).map(|_| ())
+    }
+}
