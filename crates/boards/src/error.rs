@@ -22,6 +22,21 @@ pub enum Error<E> {
         /// The address the write named.
         requested: u8,
     },
+    /// A PCA9685 channel past 15; nothing was written.
+    UnknownChannel(u8),
+    /// A PCA9685 duty past 4095; nothing was written.
+    DutyOutOfRange {
+        /// The channel the duty was for.
+        channel: u8,
+        /// The duty asked for.
+        duty: u16,
+    },
+    /// A PWM frequency the PCA9685 cannot make from its 25 MHz oscillator (it makes
+    /// 24..=1526 Hz); nothing was written.
+    Frequency {
+        /// The frequency asked for, in Hz.
+        hz: u32,
+    },
 }
 
 impl<E> Error<E> {
@@ -70,6 +85,15 @@ impl<E: fmt::Debug> fmt::Display for Error<E> {
             } => write!(
                 f,
                 "board {index} is at address {expected:#04x}, but the write named {requested:#04x}"
+            ),
+            Error::UnknownChannel(c) => write!(f, "no PWM channel {c} (a PCA9685 has 0..=15)"),
+            Error::DutyOutOfRange { channel, duty } => write!(
+                f,
+                "duty {duty} for channel {channel} is past the largest, 4095 (100 %)"
+            ),
+            Error::Frequency { hz } => write!(
+                f,
+                "a PCA9685 cannot make {hz} Hz (it makes 24..=1526 Hz with its 25 MHz oscillator)"
             ),
         }
     }

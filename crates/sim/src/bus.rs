@@ -1,4 +1,5 @@
-//! A timed I2C bus with [`Pca9555`] models attached, implementing [`embedded_hal::i2c::I2c`].
+//! A timed I2C bus with [`Pca9555`] and [`Pca9685`] models attached, implementing
+//! [`embedded_hal::i2c::I2c`]. Both kinds may share one bus, each at its own address.
 //!
 //! **Cost of a transaction**, in bit-times of the [`BusClock`]:
 //! 1 for START, 9 for every byte on the wire (8 bits and the ACK/NACK bit; the address byte
@@ -13,6 +14,11 @@
 //! the time stamped on pin changes and in the write log. Clock stretching and arbitration are
 //! not modelled.
 //!
+//! **Changes.** A PCA9555's driven pins that a transaction changed come out as a [`PinChange`]
+//! ([`VirtualBus::take_pin_changes`]); a PCA9685's channel duties that a transaction changed
+//! as a [`DutyChange`] ([`VirtualBus::take_duty_changes`]), both stamped with the
+//! transaction's completion.
+//!
 //! **Errors.** An address with no device is not acknowledged: the transaction costs START,
 //! the address byte and STOP, and fails with [`ErrorKind::NoAcknowledge`]`(`[`NoAcknowledgeSource::Address`]`)`.
 
@@ -25,6 +31,7 @@ use orch_core::{Duration, Instant};
 use serde::Serialize;
 
 use crate::pca9555::Pca9555;
+use crate::pca9685::Pca9685;
 
 /// A point in simulated time, in nanoseconds since the origin (the origin of
 /// [`orch_core::Instant`]). Nanoseconds, because bit-times at 400 kHz are 2.5 µs.
@@ -200,8 +207,13 @@ pub struct BusWrite {
     pub address: u8,
     /// The bytes after the address byte: command byte, then data.
     pub bytes: Vec<u8>,
-    /// The device's driven pins after the transaction ([`Pca9555::driven`]).
+    /// The device's driven pins after the transaction ([`Pca9555::driven`]; for a PCA9685,
+    /// the channels high some of the time, [`Pca9685::driven`]).
     pub driven: u16,
+    /// For a PCA9685, every channel's duty after the transaction ([`Pca9685::duties`],
+    /// 0..=4095, 4095 = 100 %); `None` for a PCA9555 (and then not serialised).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub duty: Option<[u16; 16]>,
 }
 
 /// A change of a device's driven pins, at the completion of the transaction that caused it.
@@ -215,6 +227,56 @@ pub struct PinChange {
     pub before: u16,
     /// Driven pins after.
     pub after: u16,
+}
+
+/// A change of a PCA9685's channel duties ([`Pca9685::duties`]), at the completion of the
+/// transaction that caused it. The chip applies it at its next PWM period, up to
+/// [`Pca9685::period_nanos`] later.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct DutyChange {
+    /// When the transaction completed.
+    pub time: SimTime,
+    /// The device's 7-bit address.
+    pub address: u8,
+    /// Every channel's duty before.
+    pub before: [u16; 16],
+    /// Every channel's duty after.
+    pub after: [u16; 16],
+}
+
+/// A device to attach to a [`VirtualBus`]: either board kind.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum Chip {
+    /// An on/off board.
+    Pca9555(Pca9555),
+    /// A PWM board.
+    Pca9685(Pca9685),
+}
+
+impl From<Pca9555> for Chip {
+    fn from(chip: Pca9555) -> Self {
+        Chip::Pca9555(chip)
+    }
+}
+
+impl From<Pca9685> for Chip {
+    fn from(chip: Pca9685) -> Self {
+        Chip::Pca9685(chip)
+    }
+}
+
+/// Where an attached device is kept: its kind's list and its index there.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Slot {
+    Io(usize),
+    Pwm(usize),
+}
+
+/// What a device drives, before and after a transaction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Output {
+    Pins(u16),
+    Duties([u16; 16]),
 }
 
 /// Bus counters since creation.
@@ -237,12 +299,16 @@ pub struct BusStats {
 pub struct VirtualBus {
     clock: BusClock,
     devices: Vec<Pca9555>,
+    pwm: Vec<Pca9685>,
+    /// Every device by address, in attachment order.
+    slots: Vec<(u8, Slot)>,
     now: SimTime,
     free_at: SimTime,
     stats: BusStats,
     log: Vec<BusWrite>,
     keep_log: bool,
     changes: Vec<PinChange>,
+    duty_changes: Vec<DutyChange>,
     last: Option<(SimTime, SimTime)>,
 }
 
@@ -252,20 +318,41 @@ impl VirtualBus {
         Self {
             clock,
             devices: Vec::new(),
+            pwm: Vec::new(),
+            slots: Vec::new(),
             now: SimTime::ZERO,
             free_at: SimTime::ZERO,
             stats: BusStats::default(),
             log: Vec::new(),
             keep_log: true,
             changes: Vec::new(),
+            duty_changes: Vec::new(),
             last: None,
         }
     }
 
-    /// Attaches a device. Give each device its own address: if two share one, only the first
-    /// attached answers (a real bus would have both drive at once).
-    pub fn attach(&mut self, device: Pca9555) {
-        self.devices.push(device);
+    /// Attaches a device, a [`Pca9555`] or a [`Pca9685`]. Give each device its own address: if
+    /// two share one, only the first attached answers (a real bus would have both drive at
+    /// once).
+    pub fn attach(&mut self, device: impl Into<Chip>) {
+        match device.into() {
+            Chip::Pca9555(d) => {
+                self.slots.push((d.address(), Slot::Io(self.devices.len())));
+                self.devices.push(d);
+            }
+            Chip::Pca9685(d) => {
+                self.slots.push((d.address(), Slot::Pwm(self.pwm.len())));
+                self.pwm.push(d);
+            }
+        }
+    }
+
+    /// The device that answers `address`, if any.
+    fn slot(&self, address: u8) -> Option<Slot> {
+        self.slots
+            .iter()
+            .find(|(a, _)| *a == address)
+            .map(|&(_, s)| s)
     }
 
     /// The bus clock.
@@ -294,19 +381,47 @@ impl VirtualBus {
         self.last
     }
 
-    /// The device at `address`, if attached.
+    /// The PCA9555 that answers `address`, if any.
     pub fn device(&self, address: u8) -> Option<&Pca9555> {
-        self.devices.iter().find(|d| d.address() == address)
+        match self.slot(address)? {
+            Slot::Io(i) => self.devices.get(i),
+            Slot::Pwm(_) => None,
+        }
     }
 
-    /// The device at `address`, mutably (to reset it, say), if attached.
+    /// The PCA9555 that answers `address`, mutably (to reset it, say), if any.
     pub fn device_mut(&mut self, address: u8) -> Option<&mut Pca9555> {
-        self.devices.iter_mut().find(|d| d.address() == address)
+        match self.slot(address)? {
+            Slot::Io(i) => self.devices.get_mut(i),
+            Slot::Pwm(_) => None,
+        }
     }
 
-    /// Every device, in attachment order.
+    /// Every PCA9555, in attachment order.
     pub fn devices(&self) -> &[Pca9555] {
         &self.devices
+    }
+
+    /// The PCA9685 that answers `address`, if any.
+    pub fn pca9685(&self, address: u8) -> Option<&Pca9685> {
+        match self.slot(address)? {
+            Slot::Pwm(i) => self.pwm.get(i),
+            Slot::Io(_) => None,
+        }
+    }
+
+    /// The PCA9685 that answers `address`, mutably (to reset it or drive its `OE` pin), if
+    /// any. A change made here is not a transaction: it reaches no [`DutyChange`].
+    pub fn pca9685_mut(&mut self, address: u8) -> Option<&mut Pca9685> {
+        match self.slot(address)? {
+            Slot::Pwm(i) => self.pwm.get_mut(i),
+            Slot::Io(_) => None,
+        }
+    }
+
+    /// Every PCA9685, in attachment order.
+    pub fn pca9685s(&self) -> &[Pca9685] {
+        &self.pwm
     }
 
     /// The counters.
@@ -338,6 +453,18 @@ impl VirtualBus {
     /// never decrease.
     pub fn take_pin_changes(&mut self) -> Vec<PinChange> {
         core::mem::take(&mut self.changes)
+    }
+
+    /// Hands the PCA9685 duty changes since the last call to `f`, oldest first, and forgets
+    /// them.
+    pub fn drain_duty_changes(&mut self, f: impl FnMut(DutyChange)) {
+        self.duty_changes.drain(..).for_each(f);
+    }
+
+    /// Takes the PCA9685 duty changes recorded since the last call, oldest first. Their times
+    /// never decrease.
+    pub fn take_duty_changes(&mut self) -> Vec<DutyChange> {
+        core::mem::take(&mut self.duty_changes)
     }
 
     /// Bit-times of a transaction made of `frames` (lengths in data bytes, alternating kinds as
@@ -376,17 +503,42 @@ impl ErrorType for VirtualBus {
 }
 
 impl VirtualBus {
-    /// After a transaction with device `index` over `span`: logs its write frames (if the log
-    /// is kept) and the pin change, if its outputs changed from `before`.
+    /// What the device in `slot` drives now.
+    fn output(&self, slot: Slot) -> Output {
+        match slot {
+            Slot::Io(i) => Output::Pins(self.devices[i].driven()),
+            Slot::Pwm(i) => Output::Duties(self.pwm[i].duties()),
+        }
+    }
+
+    fn write_frame(&mut self, slot: Slot, data: &[u8]) {
+        match slot {
+            Slot::Io(i) => self.devices[i].write_frame(data),
+            Slot::Pwm(i) => self.pwm[i].write_frame(data),
+        }
+    }
+
+    fn read_frame(&self, slot: Slot, data: &mut [u8]) {
+        match slot {
+            Slot::Io(i) => self.devices[i].read_frame(data),
+            Slot::Pwm(i) => self.pwm[i].read_frame(data),
+        }
+    }
+
+    /// After a transaction with the device at `address` over `span`: logs its write frames
+    /// (if the log is kept) and the pin or duty change, if its outputs changed from `before`.
     fn record(
         &mut self,
-        index: usize,
+        (address, slot): (u8, Slot),
         (start, end): (SimTime, SimTime),
-        before: u16,
+        before: Output,
         writes: impl IntoIterator<Item = Vec<u8>>,
     ) {
-        let address = self.devices[index].address();
-        let after = self.devices[index].driven();
+        let after = self.output(slot);
+        let (driven, duty) = match slot {
+            Slot::Io(i) => (self.devices[i].driven(), None),
+            Slot::Pwm(i) => (self.pwm[i].driven(), Some(self.pwm[i].duties())),
+        };
         if self.keep_log {
             for bytes in writes {
                 self.log.push(BusWrite {
@@ -394,17 +546,29 @@ impl VirtualBus {
                     end,
                     address,
                     bytes,
-                    driven: after,
+                    driven,
+                    duty,
                 });
             }
         }
-        if before != after {
-            self.changes.push(PinChange {
-                time: end,
-                address,
-                before,
-                after,
-            });
+        match (before, after) {
+            (Output::Pins(before), Output::Pins(after)) if before != after => {
+                self.changes.push(PinChange {
+                    time: end,
+                    address,
+                    before,
+                    after,
+                });
+            }
+            (Output::Duties(before), Output::Duties(after)) if before != after => {
+                self.duty_changes.push(DutyChange {
+                    time: end,
+                    address,
+                    before,
+                    after,
+                });
+            }
+            _ => {}
         }
     }
 }
@@ -441,7 +605,7 @@ impl I2c<SevenBitAddress> for VirtualBus {
         if operations.is_empty() {
             return Ok(()); // nothing goes on the wire
         }
-        let Some(index) = self.devices.iter().position(|d| d.address() == address) else {
+        let Some(slot) = self.slot(address) else {
             // START, the address byte (NACKed), STOP.
             self.occupy(1 + 9 + 1, 1);
             self.stats.nacks += 1;
@@ -453,11 +617,11 @@ impl I2c<SevenBitAddress> for VirtualBus {
             let data: &[u8] = data;
             let (start, end) =
                 self.occupy(Self::bits_for_frames(&[data.len()]), 1 + data.len() as u64);
-            let before = self.devices[index].driven();
-            self.devices[index].write_frame(data);
+            let before = self.output(slot);
+            self.write_frame(slot, data);
             // The bytes are copied only when the log keeps them.
             let logged = self.keep_log.then(|| data.to_vec());
-            self.record(index, (start, end), before, logged);
+            self.record((address, slot), (start, end), before, logged);
             return Ok(());
         }
         let groups = frames(operations);
@@ -469,15 +633,14 @@ impl I2c<SevenBitAddress> for VirtualBus {
         let bytes = lengths.iter().map(|&n| 1 + n as u64).sum();
         let (start, end) = self.occupy(bits, bytes);
 
-        let before = self.devices[index].driven();
+        let before = self.output(slot);
         let mut writes = Vec::new();
         for (is_read, range) in groups {
-            let device = &mut self.devices[index];
             if is_read {
                 // One frame across adjacent reads: the pair toggles on from buffer to buffer.
                 let total: usize = operations[range.clone()].iter().map(op_len).sum();
                 let mut data = vec![0; total];
-                device.read_frame(&mut data);
+                self.read_frame(slot, &mut data);
                 let mut at = 0;
                 for op in &mut operations[range] {
                     if let Operation::Read(buf) = op {
@@ -492,11 +655,11 @@ impl I2c<SevenBitAddress> for VirtualBus {
                         data.extend_from_slice(b);
                     }
                 }
-                device.write_frame(&data);
+                self.write_frame(slot, &data);
                 writes.push(data);
             }
         }
-        self.record(index, (start, end), before, writes);
+        self.record((address, slot), (start, end), before, writes);
         Ok(())
     }
 }
@@ -518,6 +681,17 @@ mod tests {
         assert_eq!(VirtualBus::bits_for_frames(&[0]), 11);
         // write_read([cmd], [2 bytes]): START, addr+cmd, Sr, addr+2, STOP.
         assert_eq!(VirtualBus::bits_for_frames(&[1, 2]), 1 + 18 + 1 + 27 + 1);
+    }
+
+    #[test]
+    fn of_two_boards_at_one_address_the_first_attached_answers() {
+        let mut bus = VirtualBus::default();
+        bus.attach(Pca9685::new(0x21));
+        bus.attach(Pca9555::new(0x21));
+        bus.write(0x21, &[0x00, 0x20]).unwrap(); // MODE1 of the PCA9685: awake
+        assert!(!bus.pca9685(0x21).unwrap().sleeping());
+        assert!(bus.device(0x21).is_none(), "the PCA9555 never answers");
+        assert_eq!(bus.devices()[0].configuration(), 0xFFFF);
     }
 
     #[test]

@@ -1,11 +1,14 @@
 //! # orch-sim: the virtual robot
 //!
 //! A simulated piano robot, faithful in bus timing and mechanics, to test the whole chain
-//! (MIDI in, interpreter, board writes, sound out) without hardware. Four parts:
+//! (MIDI in, interpreter, board writes, sound out) without hardware. Its parts:
 //!
 //! - [`Pca9555`] ([`pca9555`]): the finger board's I/O expander, register by register, with
 //!   its power-up state (every pin an input: nothing drives until configured).
-//! - [`VirtualBus`] ([`bus`]): an I2C bus with the boards on it, implementing
+//! - [`Pca9685`] ([`pca9685`]): the PWM finger board's chip, 16 channels of 12-bit PWM, with
+//!   its power-on reset state (asleep, every channel fully off), sleep and restart; it reports
+//!   each channel's duty as the chip outputs it.
+//! - [`VirtualBus`] ([`bus`]): an I2C bus with the boards on it (either kind, mixed), implementing
 //!   [`embedded_hal::i2c::I2c`]. It counts bit-times at its [`BusClock`] (START, 9 bits a byte,
 //!   repeated STARTs, STOP), serialises transactions in simulated time ([`SimTime`], in
 //!   nanoseconds), NACKs absent addresses, and logs every write.
@@ -43,13 +46,17 @@
 pub mod bus;
 pub mod mechanics;
 pub mod pca9555;
+pub mod pca9685;
 pub mod recorder;
 pub mod robot;
 
-pub use bus::{BusClock, BusError, BusStats, BusWrite, PinChange, SimTime, VirtualBus};
+pub use bus::{
+    BusClock, BusError, BusStats, BusWrite, Chip, DutyChange, PinChange, SimTime, VirtualBus,
+};
 pub use mechanics::{
     KeyMechanics, Mechanics, MechanicsConfig, MechanicsStats, Press, SoundEvent, SoundKind,
 };
 pub use pca9555::Pca9555;
+pub use pca9685::Pca9685;
 pub use recorder::{Performance, PinEdge, Recorder, Summary};
 pub use robot::{Keep, SimConfig, VirtualRobot};

@@ -88,11 +88,15 @@ impl fmt::Display for Performance {
                 let sep = if i == 0 { "" } else { " " };
                 let _ = write!(bytes, "{sep}{b:02x}");
             }
-            writeln!(
+            write!(
                 f,
                 "write {}..{} @{:#04x} [{}] driven={:#06x}",
                 w.start, w.end, w.address, bytes, w.driven
             )?;
+            if let Some(duty) = &w.duty {
+                write!(f, " duty={duty:?}")?;
+            }
+            writeln!(f)?;
         }
         for e in &self.edges {
             let key = e.key.map_or_else(|| "-".to_string(), |k| k.to_string());
