@@ -13,8 +13,9 @@
 //!   [`all_off`](Pca9685::all_off), [`sleep`](Pca9685::sleep), [`restart`](Pca9685::restart).
 //!   Its module notes give every byte, the duty mapping, the power-up story and why the default
 //!   frequency is 1526 Hz. [`Pca9685Set`] owns one bus and `N` PWM boards, a cache each; it
-//!   also implements [`orch_core::FingerBoards`] as on/off (a set bit is a channel fully on), a
-//!   separate adapter until the core plays strike and hold.
+//!   also implements [`orch_core::FingerBoards`]: `write_duties` writes the duties the core's
+//!   strike-and-hold profile plays (`Interpreter::flush_duties`), `write_board` an on/off
+//!   frame (a set bit is a channel fully on).
 //!
 //! # What goes on the wire
 //!

@@ -135,3 +135,37 @@ fn as_finger_boards_a_bit_is_a_channel_fully_on_or_off_in_one_write() {
     );
     set.destroy().done();
 }
+
+/// What orch-core's interpreter plays on a PWM key reaches the chip as it should: middle C at
+/// velocity 127 strikes fully on (channel 8 of the second board), drops to the 35 % hold when
+/// the 40 ms strike ends, and goes fully off at its release; one 5-byte write each.
+#[test]
+fn the_interpreters_strike_and_hold_reach_the_channel_as_three_writes() {
+    use orch_core::{Config, Dynamics, Instant, Interpreter};
+    const LED8_ON_L: u8 = 0x06 + 4 * 8;
+    // Channel 8 goes high at count 8 × 256 = 0x800; 35 % = 1433 counts later is 0xD99.
+    let mut set = initialised(&[
+        Transaction::write(0x41, vec![LED8_ON_L, 0x00, FULL, 0x00, 0x00]),
+        Transaction::write(0x41, vec![LED8_ON_L, 0x00, 0x08, 0x99, 0x0D]),
+        Transaction::write(0x41, vec![LED8_ON_L, 0x00, 0x00, 0x00, FULL]),
+    ]);
+    let mut robot: Interpreter = Interpreter::new(Config {
+        dynamics: Dynamics::PWM,
+        layout: orch_core::Layout {
+            boards: core::array::from_fn(|i| orch_core::BoardSpan {
+                address: ADDRESSES[i],
+                ..Config::THESIS.layout.boards[i]
+            }),
+        },
+        ..Config::THESIS
+    })
+    .unwrap();
+    let ms = Instant::from_millis;
+    robot.feed_slice(&[0x90, 60, 127], ms(0));
+    assert_eq!(robot.flush_duties(&mut set), Ok(1));
+    robot.tick(robot.next_deadline().unwrap());
+    assert_eq!(robot.flush_duties(&mut set), Ok(1));
+    robot.feed_slice(&[0x80, 60, 0], ms(500));
+    assert_eq!(robot.flush_duties(&mut set), Ok(1));
+    set.destroy().done();
+}

@@ -609,7 +609,13 @@ fn pwm_frequency(text: &str) -> Result<u32, RobotError> {
         None
     };
     match hz.map(f64::round) {
-        Some(hz) if hz >= 1.0 && crate::PWM_HZ.contains(&(hz as u32)) => Ok(hz as u32),
+        Some(hz)
+            if hz >= 1.0
+                && hz <= u32::MAX as f64
+                && orch_boards::pca9685::Prescale::from_hz(hz as u32).is_some() =>
+        {
+            Ok(hz as u32)
+        }
         _ => Err(RobotError::field(
             "pwm.frequency",
             format!("{text:?}: {}", pwm_help()),

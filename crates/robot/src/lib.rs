@@ -35,12 +35,14 @@ pub const MAX_KEYS: usize = 128;
 /// The interpreter as the host runs it: room for any configuration.
 pub type HostInterpreter = Interpreter<MAX_BOARDS, MAX_KEYS>;
 
-/// The PCA9685's PWM frequency by default: 1 kHz. See `pwm.frequency` in [`DEFAULT_TOML`].
-pub const DEFAULT_PWM_HZ: u32 = 1_000;
+/// The PCA9685's PWM frequency by default: its highest, 1526 Hz (the driver's
+/// [`DEFAULT_FREQUENCY_HZ`](orch_boards::pca9685::DEFAULT_FREQUENCY_HZ), whose docs say why).
+pub const DEFAULT_PWM_HZ: u32 = orch_boards::pca9685::DEFAULT_FREQUENCY_HZ;
 
 /// The PWM frequencies a PCA9685 makes from its internal 25 MHz oscillator: PRE_SCALE =
 /// round(25 MHz / (4096 × f)) − 1 must lie in 3..=255.
-pub const PWM_HZ: std::ops::RangeInclusive<u32> = 24..=1526;
+pub const PWM_HZ: std::ops::RangeInclusive<u32> =
+    orch_boards::pca9685::MIN_FREQUENCY_HZ..=orch_boards::pca9685::MAX_FREQUENCY_HZ;
 
 /// What a finger board drives its 16 outputs with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -209,10 +211,10 @@ duty_max_on = "30s"       #   in any duty_window ("off": no duty limit)
 
 # The PCA9685 boards' PWM frequency: 24 Hz to 1526 Hz (what the chip makes from its 25 MHz
 # oscillator). Low frequencies click audibly at a hold duty (75 Hz did on an open player
-# piano); at these frequencies a MOSFET's switching losses are negligible, but each step up
-# shortens the pulses a slow driver stage must follow. 1 kHz: no click, well inside the range.
+# piano) and delay a new duty by up to a period; even at the top a MOSFET's switching losses
+# are tens of mW a channel. So the default is the highest the chip makes.
 [pwm]
-frequency = "1kHz"
+frequency = "1526Hz"
 
 # Dynamics, for keys on PCA9685 boards (keys on PCA9555 boards play at full power). A press is
 # a strike at a duty chosen by velocity, for `strike`, then a hold until the release: velocity

@@ -179,6 +179,35 @@ impl<I2C: I2c, const N: usize> orch_core::FingerBoards for Pca9685Set<I2C, N> {
     /// or none. `board.index` must be a board of the set ([`Error::UnknownBoard`]) and
     /// `board.address` its address ([`Error::AddressMismatch`]).
     fn write_board(&mut self, board: orch_core::BoardId, outputs: u16) -> Result<(), Self::Error> {
+        let duties = core::array::from_fn(|n| {
+            if outputs & (1 << n) != 0 {
+                super::FULL_ON
+            } else {
+                0
+            }
+        });
+        self.write_duty_values(board, &duties)
+    }
+
+    /// The duties the interpreter plays ([`Interpreter::flush_duties`](orch_core::Interpreter::flush_duties):
+    /// strike, then hold), in one write of the run of channels that changed, or none. The
+    /// core's [`Duty`](orch_core::Duty) is this chip's 0..=4095 (4095: fully on).
+    fn write_duties(
+        &mut self,
+        board: orch_core::BoardId,
+        duties: &[orch_core::Duty; 16],
+    ) -> Result<(), Self::Error> {
+        self.write_duty_values(board, &duties.map(|d| d.get()))
+    }
+}
+
+impl<I2C: I2c, const N: usize> Pca9685Set<I2C, N> {
+    /// [`set_duties`](Self::set_duties) for the board `board` names, checking its address.
+    fn write_duty_values(
+        &mut self,
+        board: orch_core::BoardId,
+        duties: &[u16; 16],
+    ) -> Result<(), Error<I2C::Error>> {
         let i = self.slot(board.index)?;
         if self.addresses[i] != board.address {
             return Err(Error::AddressMismatch {
@@ -187,13 +216,6 @@ impl<I2C: I2c, const N: usize> orch_core::FingerBoards for Pca9685Set<I2C, N> {
                 requested: board.address,
             });
         }
-        let duties = core::array::from_fn(|n| {
-            if outputs & (1 << n) != 0 {
-                super::FULL_ON
-            } else {
-                0
-            }
-        });
-        self.set_duties(board.index, &duties).map(|_| ())
+        self.set_duties(board.index, duties).map(|_| ())
     }
 }
