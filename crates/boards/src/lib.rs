@@ -6,6 +6,8 @@
 //!   [`set_outputs`](Pca9555::set_outputs) / [`update_outputs`](Pca9555::update_outputs).
 //! - [`FingerBoardSet`] owns one bus and `N` boards and implements
 //!   [`orch_core::FingerBoards`], so `orch_core::FingerFrame::flush` can write to real boards.
+//! - [`MixedBoardSet`] owns one bus with boards of both kinds ([`orch_core::BoardKind`]): each
+//!   written with its own driver's bytes and cache, on/off frames and duties alike.
 //! - [`registers`] holds the PCA9555's datasheet register map, [`address`] the address helpers.
 //! - [`Pca9685`] ([`pca9685`]) drives one PWM board: [`init`](Pca9685::init) at a PWM
 //!   frequency, then [`set_duty`](Pca9685::set_duty) (one 5-byte write a key change) or
@@ -80,11 +82,13 @@ pub mod asynch;
 mod device;
 mod error;
 mod frames;
+mod mixed;
 pub mod pca9685;
 pub mod registers;
 mod set;
 
 pub use device::{Pca9555, Tca9555};
 pub use error::Error;
+pub use mixed::MixedBoardSet;
 pub use pca9685::{Pca9685, Pca9685Set};
 pub use set::FingerBoardSet;

@@ -15,6 +15,19 @@ pub struct BoardId {
     pub address: u8,
 }
 
+/// What a finger board drives its 16 outputs with.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum BoardKind {
+    /// On or off (a PCA9555 or TCA9555 I/O expander): velocity is ignored, a key is at full
+    /// power while down.
+    #[default]
+    OnOff,
+    /// A PWM duty per output (a PCA9685): velocity is strike strength
+    /// ([`dynamics`](crate::dynamics)), written with
+    /// [`write_duties`](FingerBoards::write_duties).
+    Pwm,
+}
+
 /// A set of finger boards, each with 16 outputs.
 pub trait FingerBoards {
     /// What can go wrong while writing a board.

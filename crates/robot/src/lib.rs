@@ -44,15 +44,7 @@ pub const DEFAULT_PWM_HZ: u32 = orch_boards::pca9685::DEFAULT_FREQUENCY_HZ;
 pub const PWM_HZ: std::ops::RangeInclusive<u32> =
     orch_boards::pca9685::MIN_FREQUENCY_HZ..=orch_boards::pca9685::MAX_FREQUENCY_HZ;
 
-/// What a finger board drives its 16 outputs with.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum BoardKind {
-    /// On or off: a PCA9555 or TCA9555 I/O expander. Velocity is ignored.
-    OnOff,
-    /// A PWM duty per output: a PCA9685. Velocity is strike strength (see
-    /// [`orch_core::dynamics`]).
-    Pwm,
-}
+pub use orch_core::BoardKind;
 
 /// A robot: the interpreter's configuration, how many of the boards are real, the bus clock
 /// and the keys' mechanics.

@@ -153,7 +153,7 @@ impl<I2C: I2c> Pca9685<I2C> {
 
 // One board's operations on a bus it does not own, shared by `Pca9685` and `Pca9685Set`.
 
-pub(super) fn init<I2C: I2c>(
+pub(crate) fn init<I2C: I2c>(
     i2c: &mut I2C,
     address: u8,
     state: &mut State,
@@ -172,7 +172,7 @@ pub(super) fn init<I2C: I2c>(
     Ok(())
 }
 
-pub(super) fn set_duty<I2C: I2c>(
+pub(crate) fn set_duty<I2C: I2c>(
     i2c: &mut I2C,
     address: u8,
     state: &mut State,
@@ -189,7 +189,7 @@ pub(super) fn set_duty<I2C: I2c>(
     Ok(true)
 }
 
-pub(super) fn set_duties<I2C: I2c>(
+pub(crate) fn set_duties<I2C: I2c>(
     i2c: &mut I2C,
     address: u8,
     state: &mut State,
@@ -204,7 +204,7 @@ pub(super) fn set_duties<I2C: I2c>(
     Ok(true)
 }
 
-pub(super) fn all_off<I2C: I2c>(
+pub(crate) fn all_off<I2C: I2c>(
     i2c: &mut I2C,
     address: u8,
     state: &mut State,

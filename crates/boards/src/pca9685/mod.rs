@@ -105,7 +105,7 @@
 //! Peers use 1–1.5 kHz. If a coil sings audibly at 1.5 kHz, a lower frequency is a setting:
 //! [`Prescale::from_hz`] refuses one the chip cannot make (24..=1526 Hz).
 
-mod device;
+pub(crate) mod device;
 pub(crate) mod frames;
 pub mod registers;
 mod set;
