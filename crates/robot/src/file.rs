@@ -188,6 +188,8 @@ struct Mechanics {
     press_delay: String,
     release_delay: String,
     min_hold: String,
+    softest: String,
+    soft_press_delay: String,
     key: Vec<KeyFigures>,
 }
 
@@ -197,6 +199,8 @@ impl Default for Mechanics {
             press_delay: "15ms".into(),
             release_delay: "25ms".into(),
             min_hold: "8ms".into(),
+            softest: "45%".into(),
+            soft_press_delay: "30ms".into(),
             key: Vec::new(),
         }
     }
@@ -209,6 +213,8 @@ struct KeyFigures {
     press_delay: Option<String>,
     release_delay: Option<String>,
     min_hold: Option<String>,
+    softest: Option<String>,
+    soft_press_delay: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -769,6 +775,8 @@ fn mechanics(m: &Mechanics, range: KeyRange) -> Result<MechanicsConfig, RobotErr
         press_delay: delay("mechanics.press_delay", &m.press_delay)?,
         release_delay: delay("mechanics.release_delay", &m.release_delay)?,
         min_hold: delay("mechanics.min_hold", &m.min_hold)?,
+        softest: duty("mechanics.softest", &m.softest)?.get(),
+        soft_press_delay: delay("mechanics.soft_press_delay", &m.soft_press_delay)?,
     };
     let (low, high) = (range.low().get(), range.high().get());
     let mut mechanics = MechanicsConfig::uniform(default);
@@ -801,6 +809,12 @@ fn mechanics(m: &Mechanics, range: KeyRange) -> Result<MechanicsConfig, RobotErr
         }
         if let Some(t) = &k.min_hold {
             figures.min_hold = delay(&field("min_hold"), t)?;
+        }
+        if let Some(t) = &k.softest {
+            figures.softest = duty(&field("softest"), t)?.get();
+        }
+        if let Some(t) = &k.soft_press_delay {
+            figures.soft_press_delay = delay(&field("soft_press_delay"), t)?;
         }
         mechanics = mechanics.with_key(k.note as u8 - low, figures);
     }

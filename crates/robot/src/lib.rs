@@ -95,6 +95,8 @@ impl Robot {
             boards: self.config.layout.boards[..self.boards].to_vec(),
             mechanics: self.mechanics.clone(),
             keep: orch_sim::Keep::Everything,
+            kinds: self.kinds.clone(),
+            pwm_hz: self.pwm_hz,
         }
     }
 
@@ -175,13 +177,18 @@ first_bit = 0
 clock = "400kHz"
 
 # How the keys move, for the virtual robot and for latency compensation. press_delay: from
-# the solenoid's power to the key sounding; release_delay: from power off until the key is
-# fully up; min_hold: the shortest pulse that sounds. Keys that differ are listed by note,
-# each note once.
+# the solenoid's power to the key sounding, at full power; release_delay: from power off until
+# the key is fully up; min_hold: the shortest pulse that sounds. On PCA9685 boards a softer
+# strike travels slower and a too soft one does not sound: softest is the lowest duty whose
+# strike sounds (velocity 1's loudness; full power is 127's), soft_press_delay the press delay
+# at that duty (it falls linearly to press_delay at full power). Keys that differ are listed by
+# note, each note once.
 [mechanics]
 press_delay = "15ms"
 release_delay = "25ms"
 min_hold = "8ms"
+softest = "45%"
+soft_press_delay = "30ms"
 # [[mechanics.key]]
 # note = 36
 # press_delay = "20ms"

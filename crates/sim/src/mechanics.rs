@@ -34,6 +34,24 @@
 //! A short pulse (rule 2) on a key at rest moves the finger too little to matter: the key counts
 //! as up at once. A short pulse during a smear keeps the key from returning, like any press.
 //!
+//! ## Dynamics: a press at a duty
+//!
+//! On a PWM board a press has a strength: the duty its solenoid is driven at when the press
+//! begins (its strike; [`Mechanics::press_duty`]). An on/off board presses at full power
+//! ([`Mechanics::edge`]). Two more figures of each key say what the strength does:
+//!
+//! - `softest`: the lowest duty that throws the hammer to the string. A press below it makes
+//!   no sound at all, however long it is held (rule 2 again, counted in
+//!   [`MechanicsStats::too_soft`], and its [`Press::too_soft`] says so).
+//! - `soft_press_delay`: the press delay at `softest`. A softer strike travels slower: the delay
+//!   grows linearly from `press_delay` at full power to `soft_press_delay` at `softest`.
+//!
+//! Each sound has a loudness, on the scale of MIDI velocity ([`Press::velocity`]): 1 is the
+//! key's softest sound (a strike at `softest`), 127 its loudest (full power), linear in the
+//! duty between. A robot whose velocity curve (robot.toml's `[dynamics]`) matches its keys
+//! sounds each note at the velocity asked. The duty after the strike (the hold) changes
+//! nothing heard; a duty of 0 is the pin going low.
+//!
 //! [`Mechanics::finish`] takes every pin still high as going low at the end (counted in
 //! [`MechanicsStats::stuck_at_end`]) and emits every pending key-up, even past the end, so every
 //! key-down has its key-up.
@@ -54,15 +72,60 @@ pub struct KeyMechanics {
     pub release_delay: Duration,
     /// The shortest time the pin must stay high for the key to sound.
     pub min_hold: Duration,
+    /// The lowest strike duty that sounds, in 4095ths of full power (see the
+    /// [module notes](self)).
+    pub softest: u16,
+    /// The press delay of a strike at `softest` (`press_delay` is at full power).
+    pub soft_press_delay: Duration,
 }
 
 impl KeyMechanics {
-    /// 15 ms to strike, 25 ms to return, 8 ms shortest pulse that sounds.
+    /// 15 ms to strike at full power, 30 ms at the softest duty that sounds (45 %), 25 ms to
+    /// return, 8 ms shortest pulse that sounds.
     pub const DEFAULT: Self = Self {
         press_delay: Duration::from_millis(15),
         release_delay: Duration::from_millis(25),
         min_hold: Duration::from_millis(8),
+        softest: 1843,
+        soft_press_delay: Duration::from_millis(30),
     };
+
+    /// Full power, in 4095ths.
+    pub const FULL: u16 = 4095;
+
+    /// Whether a strike at `duty` (4095ths) sounds: at or above `softest`.
+    pub fn sounds_at(&self, duty: u16) -> bool {
+        duty > 0 && duty >= self.softest
+    }
+
+    /// The press delay of a strike at `duty` (at least `softest`): `press_delay` at full
+    /// power, `soft_press_delay` at `softest`, linear between.
+    pub fn press_delay_at(&self, duty: u16) -> Duration {
+        let (full, soft) = (
+            self.press_delay.as_micros() as i64,
+            self.soft_press_delay.as_micros() as i64,
+        );
+        let span = (Self::FULL as i64 - self.softest as i64).max(0);
+        if span == 0 || duty >= Self::FULL {
+            return self.press_delay;
+        }
+        let below = (Self::FULL as i64 - duty.max(self.softest) as i64).min(span);
+        let us = full + ((soft - full) * below + span / 2).div_euclid(span);
+        Duration::from_micros(us.max(0) as u32)
+    }
+
+    /// The loudness of a strike at `duty` on the MIDI velocity scale (1..=127), if it sounds.
+    pub fn velocity_at(&self, duty: u16) -> Option<u8> {
+        if !self.sounds_at(duty) {
+            return None;
+        }
+        let span = Self::FULL.saturating_sub(self.softest) as u32;
+        if span == 0 {
+            return Some(127);
+        }
+        let above = (duty.min(Self::FULL) - self.softest) as u32;
+        Some((1 + (126 * above + span / 2) / span) as u8)
+    }
 }
 
 impl Default for KeyMechanics {
@@ -139,6 +202,12 @@ pub struct Press {
     pub sounded: Option<SimTime>,
     /// It began before the key had fully returned (rule 4).
     pub smeared: bool,
+    /// The strike's duty, in 4095ths ([`KeyMechanics::FULL`] on an on/off board).
+    pub duty: u16,
+    /// How loud it sounded, on the MIDI velocity scale (1..=127); `None` if it made no sound.
+    pub velocity: Option<u8>,
+    /// It made no sound because its duty was below the key's softest.
+    pub too_soft: bool,
 }
 
 /// What the mechanics counted.
@@ -152,6 +221,8 @@ pub struct MechanicsStats {
     pub smeared_onsets: u64,
     /// Pulses shorter than `min_hold`.
     pub short_pulses: u64,
+    /// Presses whose strike duty was below the key's softest: no sound.
+    pub too_soft: u64,
     /// Key-up events.
     pub key_ups: u64,
     /// Pins still high when [`Mechanics::finish`] was called.
@@ -169,6 +240,8 @@ enum KeyState {
         since: SimTime,
         smeared: bool,
         was_sounding: bool,
+        /// The strike's duty.
+        duty: u16,
     },
     /// Pin low; the sounded key is fully up at `returns_at`.
     Returning { returns_at: SimTime },
@@ -263,10 +336,18 @@ impl Mechanics {
         });
     }
 
-    /// `key`'s pin went high (`true`) or low at `time`. Edges must come in time order; an edge
-    /// to the level the pin already has is ignored.
+    /// `key`'s pin went high (`true`, at full power) or low at `time`. Edges must come in time
+    /// order; an edge to the level the pin already has is ignored.
     pub fn edge(&mut self, time: SimTime, key: u8, high: bool) {
+        self.press_duty(time, key, if high { KeyMechanics::FULL } else { 0 });
+    }
+
+    /// `key`'s solenoid is driven at `duty` (4095ths; 0 is the pin low) from `time`. A press
+    /// begins when the duty leaves 0 and takes that duty as its strike; a change of duty while
+    /// pressing (the hold) changes nothing heard; 0 ends the press. Times must not go back.
+    pub fn press_duty(&mut self, time: SimTime, key: u8, duty: u16) {
         let k = key as usize;
+        let high = duty > 0;
         if k >= self.state.len() {
             self.stats.ignored_edges += 1;
             return;
@@ -278,6 +359,7 @@ impl Mechanics {
                     since: time,
                     smeared: false,
                     was_sounding: false,
+                    duty,
                 };
             }
             (KeyState::Returning { returns_at }, true) => {
@@ -288,6 +370,7 @@ impl Mechanics {
                         since: time,
                         smeared: false,
                         was_sounding: false,
+                        duty,
                     };
                 } else {
                     self.stats.smeared_presses += 1;
@@ -295,6 +378,7 @@ impl Mechanics {
                         since: time,
                         smeared: true,
                         was_sounding: true,
+                        duty,
                     };
                 }
             }
@@ -303,19 +387,33 @@ impl Mechanics {
                     since,
                     smeared,
                     was_sounding,
+                    duty: strike,
                 },
                 false,
             ) => {
-                let sounds = time.nanos_since(since) >= figures.min_hold.as_micros() as u64 * 1_000;
+                let long = time.nanos_since(since) >= figures.min_hold.as_micros() as u64 * 1_000;
+                let too_soft = long && !figures.sounds_at(strike);
+                let sounds = long && !too_soft;
+                let delay = figures.press_delay_at(strike);
                 self.presses.push(Press {
                     key,
                     pin_high: since,
                     pin_low: time,
-                    sounded: sounds.then(|| since + figures.press_delay),
+                    sounded: sounds.then(|| since + delay),
                     smeared,
+                    duty: strike,
+                    velocity: if sounds {
+                        figures.velocity_at(strike)
+                    } else {
+                        None
+                    },
+                    too_soft,
                 });
+                if too_soft {
+                    self.stats.too_soft += 1;
+                }
                 let sounding = if sounds {
-                    let down = since + figures.press_delay;
+                    let down = since + delay;
                     self.emit(down, key, SoundKind::Down, smeared);
                     if smeared {
                         self.stats.smeared_onsets += 1;
@@ -325,7 +423,9 @@ impl Mechanics {
                     self.last_down[k] = down;
                     true
                 } else {
-                    self.stats.short_pulses += 1;
+                    if !too_soft {
+                        self.stats.short_pulses += 1;
+                    }
                     was_sounding
                 };
                 self.state[k] = if sounding {
@@ -391,6 +491,7 @@ mod tests {
             press_delay: Duration::from_millis(30),
             release_delay: Duration::from_millis(5),
             min_hold: Duration::from_millis(8),
+            ..KeyMechanics::DEFAULT
         };
         let mut m = Mechanics::new(1, &MechanicsConfig::uniform(fig));
         m.edge(ms(0), 0, true);
@@ -415,5 +516,35 @@ mod tests {
         let mut m = Mechanics::new(2, &MechanicsConfig::default());
         m.edge(ms(0), 5, true);
         assert_eq!(m.stats().ignored_edges, 1);
+    }
+
+    #[test]
+    fn a_softer_strike_sounds_later_and_softer_and_below_the_softest_not_at_all() {
+        let k = KeyMechanics::DEFAULT;
+        assert_eq!(k.press_delay_at(4095), Duration::from_millis(15));
+        assert_eq!(k.press_delay_at(1843), Duration::from_millis(30));
+        assert_eq!(k.velocity_at(4095), Some(127));
+        assert_eq!(k.velocity_at(1843), Some(1));
+        assert_eq!(k.velocity_at(1842), None);
+        let mut last = (Duration::from_millis(31), 0);
+        for duty in 1843..=4095 {
+            let (d, v) = (k.press_delay_at(duty), k.velocity_at(duty).unwrap());
+            assert!(d <= last.0 && v >= last.1, "duty {duty}");
+            last = (d, v);
+        }
+        let mut m = Mechanics::new(1, &MechanicsConfig::default());
+        m.press_duty(ms(0), 0, 1000);
+        m.press_duty(ms(100), 0, 0);
+        m.press_duty(ms(200), 0, 2969); // 1843 + half the span: velocity 64, 22.5 ms
+        m.press_duty(ms(240), 0, 1433); // the hold changes nothing heard
+        m.press_duty(ms(400), 0, 0);
+        let p = m.presses().to_vec();
+        assert!(p[0].too_soft && p[0].sounded.is_none() && p[0].velocity.is_none());
+        assert_eq!(p[1].velocity, Some(64));
+        assert_eq!(p[1].sounded, Some(SimTime::from_micros(222_500)));
+        assert_eq!(p[1].duty, 2969);
+        assert_eq!(m.stats().too_soft, 1);
+        assert_eq!(m.stats().short_pulses, 0);
+        assert_eq!(m.stats().clean_onsets, 1);
     }
 }

@@ -12,11 +12,12 @@
 //! boards are configured, by [`VirtualRobot::init`] or by the driver.
 
 use embedded_hal::i2c::I2c;
-use orch_core::{BoardId, BoardSpan, FingerBoards, Layout};
+use orch_core::{BoardId, BoardKind, BoardSpan, Duty, FingerBoards, Layout};
 
 use crate::bus::{BusClock, BusError, SimTime, VirtualBus};
 use crate::mechanics::{Mechanics, MechanicsConfig};
 use crate::pca9555::{Pca9555, CONFIGURATION_0, OUTPUT_PORT_0};
+use crate::pca9685::Pca9685;
 use crate::recorder::{Performance, PinEdge, Recorder};
 
 /// What the virtual robot is made of.
@@ -32,6 +33,11 @@ pub struct SimConfig {
     /// What to keep: every write, edge and sound ([`Keep::Everything`]), or only the presses
     /// and the figures ([`Keep::Presses`], memory that follows the notes, a fraction of it).
     pub keep: Keep,
+    /// What each board is, in the order of `boards`: a PCA9555 ([`BoardKind::OnOff`]) or a
+    /// PCA9685 ([`BoardKind::Pwm`]). A board with no entry is on/off.
+    pub kinds: Vec<BoardKind>,
+    /// The PCA9685 boards' PWM frequency, Hz, for drivers that initialise them.
+    pub pwm_hz: u32,
 }
 
 /// What a [`VirtualRobot`] keeps of a performance.
@@ -54,7 +60,17 @@ impl SimConfig {
             boards: Layout::THESIS.boards.to_vec(),
             mechanics: MechanicsConfig::default(),
             keep: Keep::Everything,
+            kinds: Vec::new(),
+            pwm_hz: Self::PWM_HZ,
         }
+    }
+
+    /// The PCA9685's highest PWM frequency, the default: 1526 Hz.
+    pub const PWM_HZ: u32 = 1526;
+
+    /// What board `index` is ([`BoardKind::OnOff`] past `kinds`).
+    pub fn kind(&self, index: usize) -> BoardKind {
+        self.kinds.get(index).copied().unwrap_or_default()
     }
 
     /// The same boards as `layout`.
@@ -95,8 +111,11 @@ impl VirtualRobot {
         let mut bus = VirtualBus::new(config.clock);
         let mut pins = Vec::with_capacity(config.boards.len());
         let mut first_key = 0usize;
-        for span in &config.boards {
-            bus.attach(Pca9555::new(span.address));
+        for (i, span) in config.boards.iter().enumerate() {
+            match config.kind(i) {
+                BoardKind::OnOff => bus.attach(Pca9555::new(span.address)),
+                BoardKind::Pwm => bus.attach(Pca9685::new(span.address)),
+            }
             let mut map = [None; 16];
             for i in 0..span.keys as usize {
                 let bit = span.first_bit as usize + i;
@@ -140,11 +159,26 @@ impl VirtualRobot {
 
     /// Configures every board as a driver would: outputs low (`[0x02, 0, 0]`), then every pin
     /// an output (`[0x06, 0, 0]`). Two transactions a board, from the present.
+    /// A PCA9685 board is initialised as its driver does: every channel off, asleep, the
+    /// prescale for [`SimConfig::pwm_hz`], totem-pole outputs, awake with auto-increment.
     pub fn init(&mut self) -> Result<(), BusError> {
-        let addresses: Vec<u8> = self.config.boards.iter().map(|b| b.address).collect();
-        let result = addresses.into_iter().try_for_each(|a| {
-            self.bus.write(a, &[OUTPUT_PORT_0, 0, 0])?;
-            self.bus.write(a, &[CONFIGURATION_0, 0, 0])
+        let boards: Vec<(u8, BoardKind)> = (0..self.config.boards.len())
+            .map(|i| (self.config.boards[i].address, self.config.kind(i)))
+            .collect();
+        let prescale = (25_000_000.0 / (4096.0 * self.config.pwm_hz.max(1) as f64)).round() - 1.0;
+        let prescale = prescale.clamp(3.0, 255.0) as u8;
+        let result = boards.into_iter().try_for_each(|(a, kind)| match kind {
+            BoardKind::OnOff => {
+                self.bus.write(a, &[OUTPUT_PORT_0, 0, 0])?;
+                self.bus.write(a, &[CONFIGURATION_0, 0, 0])
+            }
+            BoardKind::Pwm => {
+                self.bus.write(a, &[0xFD, 0x10])?; // ALL_LED_OFF_H: full off
+                self.bus.write(a, &[0x00, 0x30])?; // MODE1: SLEEP | AI
+                self.bus.write(a, &[0xFE, prescale])?; // PRE_SCALE
+                self.bus.write(a, &[0x01, 0x04])?; // MODE2: OUTDRV
+                self.bus.write(a, &[0x00, 0x20]) // MODE1: AI, awake
+            }
         });
         self.sync();
         result
@@ -162,6 +196,14 @@ impl VirtualRobot {
     /// [`finish`](Self::finish)), with their own completion times.
     pub fn bus_mut(&mut self) -> &mut VirtualBus {
         &mut self.bus
+    }
+
+    /// The model of PWM board `index` (in configuration order), if it is one.
+    pub fn pwm_board(&self, index: usize) -> Option<&Pca9685> {
+        self.config
+            .boards
+            .get(index)
+            .and_then(|s| self.bus.pca9685(s.address))
     }
 
     /// The model of board `index` (in configuration order).
@@ -204,6 +246,41 @@ impl VirtualRobot {
             self.recorder
                 .count_writes((tx - self.log_seen as u64) as usize);
             self.log_seen = tx as usize;
+        }
+        // The PWM boards' duties, in time order with the on/off boards' pins (each change is
+        // stamped with its transaction's end, and both lists are in transaction order).
+        let mut duty_changes = Vec::new();
+        self.bus.drain_duty_changes(|c| duty_changes.push(c));
+        for change in duty_changes {
+            let board = self
+                .config
+                .boards
+                .iter()
+                .position(|s| s.address == change.address);
+            for ch in 0..16usize {
+                let (before, after) = (change.before[ch], change.after[ch]);
+                if before == after {
+                    continue;
+                }
+                let key = board.and_then(|b| self.pins[b][ch]);
+                if (before > 0) != (after > 0) {
+                    if keep {
+                        self.recorder.record_edge(PinEdge {
+                            time: change.time,
+                            board: board.map_or(u8::MAX, |b| b as u8),
+                            address: change.address,
+                            bit: ch as u8,
+                            key,
+                            high: after > 0,
+                        });
+                    } else {
+                        self.recorder.count_edges(1);
+                    }
+                }
+                if let Some(key) = key {
+                    self.mechanics.press_duty(change.time, key, after);
+                }
+            }
         }
         let mut changes = core::mem::take(&mut self.scratch);
         self.bus.drain_pin_changes(|c| changes.push(c));
@@ -289,10 +366,49 @@ impl FingerBoards for VirtualRobot {
     type Error = BusError;
 
     /// One I2C write `[0x02, lo, hi]` to `board.address`, starting at the present or when the
-    /// bus is free. An address with no board fails with [`BusError::AddressNack`].
+    /// bus is free (a PWM board: its 16 channels fully on or off, as
+    /// [`write_duties`](FingerBoards::write_duties) writes them). An address with no board
+    /// fails with [`BusError::AddressNack`].
     fn write_board(&mut self, board: BoardId, outputs: u16) -> Result<(), BusError> {
+        if self.config.kind(board.index as usize) == BoardKind::Pwm {
+            let duties = core::array::from_fn(|n| {
+                if outputs & (1 << n) != 0 {
+                    Duty::FULL
+                } else {
+                    Duty::OFF
+                }
+            });
+            return self.write_duties(board, &duties);
+        }
         let [lo, hi] = outputs.to_le_bytes();
         let result = self.bus.write(board.address, &[OUTPUT_PORT_0, lo, hi]);
+        self.sync();
+        result
+    }
+
+    /// A PWM board: one auto-increment write of all 16 channels' registers (LED0_ON_L on; a
+    /// driver writes only the channels that changed: drive the robot through `orch-boards`'
+    /// `MixedBoardSet` for the real bus time). Each channel goes high at count 0 and low
+    /// `duty` counts later; 0 and 4095 are the chip's fully off and fully on. An on/off board:
+    /// its outputs with a duty above 0.
+    fn write_duties(&mut self, board: BoardId, duties: &[Duty; 16]) -> Result<(), BusError> {
+        if self.config.kind(board.index as usize) != BoardKind::Pwm {
+            return self.write_board(board, orch_core::on_off(duties));
+        }
+        let mut frame = [0u8; 65];
+        frame[0] = 0x06; // LED0_ON_L
+        for (n, d) in duties.iter().enumerate() {
+            let regs = match d.get() {
+                0 => [0, 0, 0, 0x10],
+                4095.. => [0, 0x10, 0, 0],
+                v => {
+                    let [lo, hi] = v.to_le_bytes();
+                    [0, 0, lo, hi]
+                }
+            };
+            frame[1 + 4 * n..5 + 4 * n].copy_from_slice(&regs);
+        }
+        let result = self.bus.write(board.address, &frame);
         self.sync();
         result
     }

@@ -55,6 +55,7 @@ fn press_and_release_delays_apply_per_key() {
         press_delay: Duration::from_millis(40),
         release_delay: Duration::from_millis(60),
         min_hold: Duration::from_millis(8),
+        ..KeyMechanics::DEFAULT
     };
     let config = MechanicsConfig::default().with_key(1, slow);
     let mut m = play(&config, 2, &[(0, 100, 200), (1, 100, 200)]);
