@@ -187,6 +187,7 @@ impl Settings {
                 },
             },
             press_lead_us: vec![self.press_us; 61],
+            press_lead_by_velocity_us: Vec::new(),
             release_lead_us: vec![self.release_us; 61],
             min_hold_us: vec![self.min_press_us / 2; 61],
             restrike_gap_us: self.gap_us,

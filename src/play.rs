@@ -35,25 +35,11 @@ pub fn load_song(path: &Path) -> anyhow::Result<Song> {
 }
 
 /// Loads the robot for a performance (`play`, `analyze`, `conduct`, `run`).
-///
-/// A robot with PCA9685 (PWM) boards is refused here for now: robot.toml reads and checks
-/// them and `orch interpret` writes their duties, but the performer and the virtual robot
-/// drive only on/off boards so far, and a performance that quietly played a PWM robot as an
-/// on/off one would report what did not happen.
 pub fn load_robot(path: Option<&Path>) -> anyhow::Result<Robot> {
-    let robot = match path {
-        Some(p) => Robot::load(p)?,
-        None => Robot::thesis(),
-    };
-    if robot.has_dynamics() {
-        return Err(bad_input(format!(
-            "{}: PCA9685 (PWM) boards are not played yet: `orch interpret` writes their \
-             duties, but the performer and the virtual robot drive PCA9555/TCA9555 boards only; \
-             use kind = \"pca9555\" here",
-            path.map_or("robot".into(), |p| p.display().to_string())
-        )));
+    match path {
+        Some(p) => Ok(Robot::load(p)?),
+        None => Ok(Robot::thesis()),
     }
-    Ok(robot)
 }
 
 /// The tempo factors `--tempo` takes: a twentieth to twenty times as written.
@@ -747,11 +733,19 @@ pub struct Wrong {
     pub note: String,
     /// 1..=16, as people count channels.
     pub channel: u8,
-    /// late, early, joined, unmatched, or the drop's reason.
+    /// late, early, joined, unmatched, the drop's reason (`too_soft` among them: no sound),
+    /// or, for a note struck on time on a PWM key, `louder` or `softer` (than its velocity, by
+    /// more than 2 steps).
     pub outcome: &'static str,
     /// How late or early, ms (late and early only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ms: Option<f64>,
+    /// Its velocity in the file, and how loud it sounded on the velocity scale (`louder` and
+    /// `softer` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<u8>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sounded_velocity: Option<u8>,
 }
 
 /// The notes that will go wrong, the worst first. Bars and beats are the song's own: the
@@ -763,12 +757,22 @@ pub fn went_wrong(song: &Song, played: &Played, tempo: Tempo) -> Vec<Wrong> {
         .map(|r| {
             let wall = (r.score_at_us - played.start_us as i64).max(0) as f64;
             let (bar, beat) = song.bar_beat((wall * tempo.get()).round() as u64);
+            let loudness = match r.outcome {
+                Outcome::OnTime { .. } => played.loudness_off(r),
+                _ => None,
+            };
             Wrong {
                 bar,
                 beat,
                 note: note_name(r.note),
                 channel: r.channel + 1,
-                outcome: r.outcome.name(),
+                outcome: match loudness {
+                    Some(true) => "louder",
+                    Some(false) => "softer",
+                    None => r.outcome.name(),
+                },
+                velocity: loudness.map(|_| r.velocity),
+                sounded_velocity: loudness.and(r.sounded_velocity),
                 ms: match r.outcome {
                     Outcome::Late { by_us } | Outcome::Early { by_us } => {
                         Some(by_us as f64 / 1000.0)
@@ -811,7 +815,13 @@ pub fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
         writeln!(out)?;
         writeln!(out, "notes that will go wrong, the worst first:")?;
         for w in wrong.iter().take(LISTED) {
-            let amount = w.ms.map_or(String::new(), |ms| format!(" by {ms:.1} ms"));
+            let amount = match (w.ms, w.velocity, w.sounded_velocity) {
+                (Some(ms), _, _) => format!(" by {ms:.1} ms"),
+                (None, Some(v), Some(heard)) => {
+                    format!(" than asked: velocity {v}, sounds as {heard}")
+                }
+                _ => String::new(),
+            };
             writeln!(
                 out,
                 "  {:>4}:{:<2} {:<4} ch {:<2} {}{}",
@@ -863,7 +873,7 @@ fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
     ));
     let d = &o.dropped;
     let budget = robot.config.guard.max_keys_down;
-    let counted: [(u64, String); 11] = [
+    let counted: [(u64, String); 14] = [
         (
             o.joined,
             "notes land on a key already down for another note and make no sound of their own"
@@ -911,6 +921,24 @@ fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
         (
             d.cancelled,
             "re-strikes waiting for their key's rest will be cancelled".into(),
+        ),
+        (
+            d.too_soft,
+            "notes will strike too softly to sound (below the key's softest duty: raise \
+             dynamics.softest, or lower mechanics.softest if the keys sound softer than that)"
+                .into(),
+        ),
+        (
+            r.velocity_error.map_or(0, |v| v.softer),
+            "notes will sound softer than their velocity by more than 2 steps (robot.toml's \
+             [dynamics] curve is below what the keys need)"
+                .into(),
+        ),
+        (
+            r.velocity_error.map_or(0, |v| v.louder),
+            "notes will sound louder than their velocity by more than 2 steps (robot.toml's \
+             [dynamics] curve is above what the keys need)"
+                .into(),
         ),
     ];
     f.extend(

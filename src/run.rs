@@ -56,6 +56,8 @@ struct Tap {
     byte: Option<u64>,
     writes: u64,
     strikes: u64,
+    /// What each board is (PWM boards are written duties).
+    kinds: Vec<orch_core::BoardKind>,
 }
 
 impl FingerBoards for Tap {
@@ -73,6 +75,30 @@ impl FingerBoards for Tap {
         match &mut self.out {
             Out::Sim(b) => b.write_board(board, outputs).map_err(|e| format!("{e:?}")),
             Out::I2c(b) => b.write_board(board, outputs).map_err(|e| format!("{e:?}")),
+        }
+    }
+
+    /// A robot with PWM boards: their duties (logged as `orch interpret --json` prints them),
+    /// on/off boards' outputs as `write_board`'s.
+    fn write_duties(
+        &mut self,
+        board: BoardId,
+        duties: &[orch_core::Duty; 16],
+    ) -> Result<(), String> {
+        if self.kinds.get(board.index as usize) != Some(&orch_core::BoardKind::Pwm) {
+            return self.write_board(board, orch_core::on_off(duties));
+        }
+        self.writes += 1;
+        if let Some(w) = self.json.as_mut() {
+            let values: Vec<u16> = duties.iter().map(|d| d.get()).collect();
+            let line = json!({"t_us": self.t_us, "byte": self.byte, "address": board.address, "duty": values});
+            if writeln!(w, "{line}").is_err() {
+                self.json = None;
+            }
+        }
+        match &mut self.out {
+            Out::Sim(b) => b.write_duties(board, duties).map_err(|e| format!("{e:?}")),
+            Out::I2c(b) => b.write_duties(board, duties).map_err(|e| format!("{e:?}")),
         }
     }
 }
@@ -350,6 +376,11 @@ fn open_out(spec: &OutSpec, robot: &Robot) -> anyhow::Result<Out> {
     }
     match &spec.target {
         Target::Sim => Ok(Out::Sim(Box::new(sim(robot)?))),
+        Target::I2c(_) if robot.has_dynamics() => Err(bad_input(format!(
+            "--out {}: PCA9685 (PWM) boards on a Linux I2C bus are not driven yet; i2c outputs \
+             drive PCA9555/TCA9555 boards (--out sim plays PCA9685 ones)",
+            spec.text
+        ))),
         Target::I2c(path) => {
             let bus = open_i2c(&path.to_string_lossy())?;
             let addresses: Vec<u8> = robot.config.layout.boards[..robot.boards]
@@ -437,8 +468,12 @@ impl Runner {
     fn flush(&mut self, t_us: u64, byte: Option<u64>) -> anyhow::Result<()> {
         self.tap.set_time(t_us);
         self.tap.byte = byte;
-        self.interp
-            .flush(&mut self.tap)
+        let flushed = if self.robot.has_dynamics() {
+            self.interp.flush_duties(&mut self.tap)
+        } else {
+            self.interp.flush(&mut self.tap)
+        };
+        flushed
             .map_err(|e| anyhow::anyhow!("board {:#04x} failed: {}", e.board.address, e.error))?;
         Ok(())
     }
@@ -501,9 +536,7 @@ impl Runner {
             eprintln!("orch: SIGHUP: no --robot file to read again; the thesis's robot stays");
             return;
         };
-        match crate::play::load_robot(Some(&path))
-            .and_then(|r| r.interpreter().map(|_| r).map_err(anyhow::Error::from))
-        {
+        match Robot::load(&path).and_then(|r| r.interpreter().map(|_| r)) {
             Err(e) => eprintln!(
                 "orch: SIGHUP: {} refused, the robot stays as it was: {e}",
                 path.display()
@@ -520,6 +553,14 @@ impl Runner {
                     eprintln!(
                         "orch: SIGHUP: {} moves the I2C boards: restart orch run for that; the \
                          robot stays as it was",
+                        path.display()
+                    );
+                    return;
+                }
+                if new.kinds != self.robot.kinds {
+                    eprintln!(
+                        "orch: SIGHUP: {} changes the kind of a board (PCA9555, PCA9685): \
+                         restart orch run for that; the robot stays as it was",
                         path.display()
                     );
                     return;
@@ -681,6 +722,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         MidiIn::open(&input, tx).map_err(|e| bad_input(format!("--in {}: {e}", args.input)))?;
     tracing::debug!(input = midi_in.name(), "reading");
 
+    let kinds = robot.kinds.clone();
     let mut runner = Runner {
         robot,
         interp,
@@ -691,6 +733,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             byte: None,
             writes: 0,
             strikes: 0,
+            kinds,
         },
         thru,
         origin: None,

@@ -28,21 +28,26 @@ pub enum DropReason {
     /// The performance was stopped ([`Interpreter::all_off`](crate::Interpreter::all_off))
     /// before it could strike.
     Stopped,
+    /// Its strike was too soft to sound: the duty its velocity gave was below the key's
+    /// softest. The robot says so (the virtual robot's mechanics), never the interpreter,
+    /// which struck the key as asked ([`dynamics`](crate::dynamics)).
+    TooSoft,
 }
 
 impl DropReason {
     /// Every reason, in report order.
-    pub const ALL: [DropReason; 6] = [
+    pub const ALL: [DropReason; 7] = [
         DropReason::Channel,
         DropReason::Range,
         DropReason::Power,
         DropReason::TooFast,
+        DropReason::TooSoft,
         DropReason::Cancelled,
         DropReason::Stopped,
     ];
 
-    /// The reason's name in reports: `channel`, `range`, `power`, `too_fast`, `cancelled`,
-    /// `stopped`.
+    /// The reason's name in reports: `channel`, `range`, `power`, `too_fast`, `too_soft`,
+    /// `cancelled`, `stopped`.
     pub const fn name(self) -> &'static str {
         match self {
             DropReason::Channel => "channel",
@@ -51,6 +56,7 @@ impl DropReason {
             DropReason::TooFast => "too_fast",
             DropReason::Cancelled => "cancelled",
             DropReason::Stopped => "stopped",
+            DropReason::TooSoft => "too_soft",
         }
     }
 }

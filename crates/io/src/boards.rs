@@ -310,6 +310,15 @@ impl<I2C: TimedBus> Boards for ResilientBoards<I2C> {
     }
 }
 
+/// The refusal of a robot with PCA9685 boards on a Linux I2C bus.
+pub(crate) fn pwm_unsupported() -> OutError {
+    OutError::Board(
+        "PCA9685 (PWM) boards on a Linux I2C bus are not driven yet: i2c outputs drive \
+         PCA9555/TCA9555 boards (the virtual robot and orch interpret play PCA9685 ones)"
+            .into(),
+    )
+}
+
 /// A robot on finger boards driven from this host, as a [`MidiOut`]. See the
 /// [module notes](self).
 #[derive(Debug)]
@@ -325,6 +334,9 @@ pub struct BoardsOut<I2C: TimedBus> {
 impl<I2C: TimedBus> BoardsOut<I2C> {
     /// A robot for `config` on `bus`, its boards at the addresses `config`'s layout names.
     pub fn new(config: Config<MAX_BOARDS>, bus: I2C) -> Result<Self, OutError> {
+        if !config.dynamics.is_on_off() {
+            return Err(pwm_unsupported());
+        }
         // Board i of the layout is board i of the set: every board up to the last one with
         // keys (the layout's unused room after it has none).
         let boards = &config.layout.boards;

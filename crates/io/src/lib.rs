@@ -159,6 +159,9 @@ impl Output {
             Target::Udp(a) => Output::Udp(UdpOut::open(a)?),
             #[cfg(feature = "alsa")]
             Target::Alsa(a) => Output::Alsa(alsa_seq::AlsaOut::open(a)?),
+            Target::I2c(_) if !config.dynamics.is_on_off() => {
+                return Err(boards::pwm_unsupported());
+            }
             Target::I2c(p) => Output::I2c(Box::new(BoardsOut::new(*config, open_i2c(&path(p))?)?)),
         }))
     }

@@ -89,6 +89,11 @@ pub struct NoteRecord {
     pub note: u8,
     /// Where it landed, if it has a key.
     pub landing: Option<Landing>,
+    /// Its velocity in the score (1..=127).
+    pub velocity: u8,
+    /// How loud its own strike sounded, on the MIDI velocity scale (the virtual robot's
+    /// loudness; see `orch_sim::Press::velocity`), if it sounded.
+    pub sounded_velocity: Option<u8>,
 }
 
 /// The outcome of a note not delivered yet, or waiting to strike: if the account closes so, it
@@ -133,17 +138,20 @@ impl Ledger {
                     channel: 0,
                     note: 0,
                     landing: None,
+                    velocity: 0,
+                    sounded_velocity: None,
                 },
             );
         }
         &mut self.notes[i]
     }
 
-    /// Score note `id` (channel, note) wants to sound at `score_at_us`.
-    pub fn score(&mut self, id: NoteId, channel: u8, note: u8, score_at_us: i64) {
+    /// Score note `id` (channel, note, velocity) wants to sound at `score_at_us`.
+    pub fn score(&mut self, id: NoteId, channel: u8, note: u8, velocity: u8, score_at_us: i64) {
         let e = self.entry(id);
         e.channel = channel;
         e.note = note;
+        e.velocity = velocity;
         e.score_at_us = score_at_us;
     }
 
@@ -268,6 +276,7 @@ impl Ledger {
         }
         queue.pop_front();
         let e = &mut self.notes[id as usize];
+        e.sounded_velocity = p.velocity;
         e.outcome = match p.sounded {
             Some(t) => {
                 let err = (t.as_nanos() / 1000) as i64 - e.score_at_us;
@@ -280,6 +289,8 @@ impl Ledger {
                     Outcome::OnTime { error_us: err }
                 }
             }
+            // Its strike was below the key's softest duty: the robot heard nothing.
+            None if p.too_soft => Outcome::Dropped(DropReason::TooSoft),
             None => Outcome::Unmatched,
         };
     }

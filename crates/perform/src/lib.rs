@@ -71,11 +71,13 @@ pub use conduct::{
 };
 pub use ledger::{Ledger, NoteRecord, Outcome, ON_TIME_US};
 pub use link::{DinWire, Link, MidiOut, MidiRecording, RunningStatus};
-pub use performer::{perform, Control, Live, PerformError, Played, Setup, KEEP_ALIVE_US};
+pub use performer::{
+    perform, Control, Live, PerformError, Played, Setup, KEEP_ALIVE_US, VELOCITY_TOLERANCE,
+};
 pub use plan::{
     Jumped, KeyMap, NoteId, PlanRules, PlanStats, Planned, Planner, ScoreEvent, Skipped,
 };
-pub use report::{Bus, Dropped, Outcomes, Planning, Report, Spread};
+pub use report::{Bus, Dropped, Outcomes, Planning, Report, Spread, VelocityError};
 pub use robot::{
     sim_boards, Boards, Decided, HostInterpreter, LocalRobot, RobotError, SimBoards, MAX_BOARDS,
     MAX_KEYS,

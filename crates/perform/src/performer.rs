@@ -10,7 +10,7 @@ use orch_sim::{Performance, SimConfig};
 use crate::ledger::{Ledger, NoteRecord, Outcome};
 use crate::link::{DinWire, Link, MidiOut, RunningStatus};
 use crate::plan::{PlanRules, PlanStats, Planned, Planner, ScoreEvent};
-use crate::report::{Bus, Outcomes, Report, Spread};
+use crate::report::{Bus, Outcomes, Report, Spread, VelocityError};
 use crate::robot::{sim_boards, LocalRobot, SimBoards, MAX_BOARDS};
 use crate::tempo::{Tempo, TimeMap};
 
@@ -21,6 +21,10 @@ pub const KEEP_ALIVE_US: u64 = 200_000;
 /// The longest burst the performer plans for on a DIN line: a chord of 16 notes, every
 /// message with its status byte (15.4 ms).
 const DIN_BURST_US: u64 = 16 * 3 * Link::DIN_BYTE_US;
+
+/// How far a struck note's loudness may be from its velocity, in MIDI velocity steps, before
+/// `orch analyze` names it as too loud or too soft for the robot.
+pub const VELOCITY_TOLERANCE: u8 = 2;
 
 /// How often a live performance tells where it stands (25 times a second).
 const SHOW_EVERY_US: u64 = 40_000;
@@ -46,6 +50,19 @@ impl Setup {
         self.sim.clock.nanos_for_bits(38).div_ceil(1000)
     }
 
+    /// The longest the bus can be busy with one write to every board, µs: a PCA9555's is 38
+    /// bit-times, a PCA9685's at most 596 (all 16 channels in one write). A write waits at
+    /// most that long behind the others.
+    pub fn bus_queue_us(&self) -> u64 {
+        let bits: u64 = (0..self.sim.boards.len())
+            .map(|i| match self.sim.kind(i) {
+                orch_core::BoardKind::OnOff => 38,
+                orch_core::BoardKind::Pwm => 596,
+            })
+            .sum();
+        self.sim.clock.nanos_for_bits(bits).div_ceil(1000)
+    }
+
     /// The planner's rules for this robot: each key's press lead is its press delay, one
     /// board write and the link's time; its release lead, its release delay and one write.
     pub fn rules(&self) -> PlanRules {
@@ -63,6 +80,29 @@ impl Setup {
             press_lead_us: (0..keys)
                 .map(|k| m.for_key(k as u8).press_delay.as_micros() as u64 + write)
                 .collect(),
+            // A PWM key: its strike's duty (from the velocity) sets its press delay, and its
+            // write is one channel's five bytes (56 bit-times).
+            press_lead_by_velocity_us: if c.dynamics.is_on_off() {
+                Vec::new()
+            } else {
+                let pwm_write =
+                    self.sim.clock.nanos_for_bits(56).div_ceil(1000) + self.link.note_lead_us();
+                (0..keys)
+                    .map(|k| {
+                        let touch = c.dynamics.touch(k as u8);
+                        if touch.is_full() {
+                            return Vec::new();
+                        }
+                        let figures = m.for_key(k as u8);
+                        (0..=127u8)
+                            .map(|v| {
+                                let duty = touch.strike_duty(orch_core::Velocity::from_bits(v));
+                                figures.press_delay_at(duty.get()).as_micros() as u64 + pwm_write
+                            })
+                            .collect()
+                    })
+                    .collect()
+            },
             release_lead_us: (0..keys)
                 .map(|k| m.for_key(k as u8).release_delay.as_micros() as u64 + write)
                 .collect(),
@@ -74,7 +114,7 @@ impl Setup {
             min_hold_us: (0..keys)
                 .map(|k| {
                     m.for_key(k as u8).min_hold.as_micros() as u64
-                        + self.sim.boards.len() as u64 * self.write_us()
+                        + self.bus_queue_us()
                         + match self.link {
                             Link::Direct => 0,
                             Link::Din => DIN_BURST_US,
@@ -100,7 +140,7 @@ impl Setup {
             compensation: self.compensation,
             // The bus's queue; on a DIN line also half a burst, since a press can arrive that
             // much earlier than planned and find its key resting longer.
-            bus_margin_us: self.sim.boards.len() as u64 * self.write_us()
+            bus_margin_us: self.bus_queue_us()
                 + match self.link {
                     Link::Direct => 0,
                     Link::Din => DIN_BURST_US / 2,
@@ -317,6 +357,8 @@ pub struct Played {
     /// Notes the performance came to again after a jump back: `records` holds the score's
     /// notes plus these (each pass over a note is a record of its own).
     pub replayed: u64,
+    /// Per key: whether velocity is played there (a PWM key), for the velocity error.
+    pub dynamic_keys: Vec<bool>,
 }
 
 impl Played {
@@ -350,6 +392,9 @@ impl Played {
             cut_by_watchdog: s.cut_by_watchdog.into(),
             onset_ms: Spread::of_onsets(&self.records),
             onset_uncompensated_ms: uncompensated,
+            velocity_error: VelocityError::of(&self.records, |key| {
+                self.dynamic_keys.get(key as usize) == Some(&true)
+            }),
             peak_keys_down: s.peak_keys_down,
             too_short_to_sound: m.short_pulses,
             smeared: m.smeared_presses,
@@ -366,8 +411,21 @@ impl Played {
         }
     }
 
-    /// The notes that went wrong, the worst first: dropped, struck without a sound, joined,
-    /// then late and early by how much.
+    /// Whether `r` struck on a PWM key and sounded louder (`Some(true)`) or softer
+    /// (`Some(false)`) than its velocity by more than [`VELOCITY_TOLERANCE`] steps.
+    pub fn loudness_off(&self, r: &NoteRecord) -> Option<bool> {
+        let key = r.landing?.key;
+        if self.dynamic_keys.get(usize::from(key)) != Some(&true) || r.outcome.error_ms().is_none()
+        {
+            return None;
+        }
+        let heard = r.sounded_velocity?;
+        (heard.abs_diff(r.velocity) > VELOCITY_TOLERANCE).then_some(heard > r.velocity)
+    }
+
+    /// The notes that went wrong, the worst first: dropped (too soft among them), struck
+    /// without a sound, joined, late and early by how much, then those that sounded louder or
+    /// softer than asked by more than [`VELOCITY_TOLERANCE`] steps, by how much.
     pub fn went_wrong(&self) -> Vec<&NoteRecord> {
         let rank = |r: &NoteRecord| -> (u8, i64) {
             match r.outcome {
@@ -375,6 +433,10 @@ impl Played {
                 Outcome::Unmatched => (1, 0),
                 Outcome::Joined => (2, 0),
                 Outcome::Late { by_us } | Outcome::Early { by_us } => (3, -i64::from(by_us)),
+                _ if self.loudness_off(r).is_some() => (
+                    4,
+                    -i64::from(r.sounded_velocity.unwrap_or(0).abs_diff(r.velocity)),
+                ),
                 _ => (9, 0),
             }
         };
@@ -488,7 +550,7 @@ where
                 let unsent = jumped.unsent.iter().filter(|u| back || u.note < first);
                 for u in unsent.chain(&jumped.passed) {
                     let id = u.note + offset;
-                    ledger.score(id, u.channel, u.note_number, u.score_at_us);
+                    ledger.score(id, u.channel, u.note_number, u.velocity, u.score_at_us);
                     ledger.skipped(id);
                 }
                 if back {
@@ -659,8 +721,8 @@ where
                     committed = Some(committed.map_or(i, |m| m.max(i)));
                 }
                 let note = note.map(|i| i + offset);
-                if let (Some(id), Some((ch, n, _))) = (note, bytes.note_on()) {
-                    ledger.score(id, ch, n, score_at_us);
+                if let (Some(id), Some((ch, n, v))) = (note, bytes.note_on()) {
+                    ledger.score(id, ch, n, v, score_at_us);
                     notes_sent += 1;
                     let now = clock.now_us() as i64;
                     sent_ahead.retain(|&(_, at)| at > now);
@@ -686,13 +748,14 @@ where
                 score_at_us,
                 channel,
                 note_number,
+                velocity,
                 note,
                 reason,
                 ..
             } => {
                 committed = Some(committed.map_or(note, |m| m.max(note)));
                 let note = note + offset;
-                ledger.score(note, channel, note_number, score_at_us);
+                ledger.score(note, channel, note_number, velocity, score_at_us);
                 ledger.dropped(note, reason);
             }
         }
@@ -773,6 +836,9 @@ where
         stopped: stopped_at.is_some(),
         jumps,
         replayed: u64::from(offset),
+        dynamic_keys: (0..setup.config.range.keys())
+            .map(|k| !setup.config.dynamics.touch(k as u8).is_full())
+            .collect(),
     })
 }
 

@@ -92,6 +92,10 @@ pub struct PlanRules {
     pub keys: KeyMap,
     /// Per key: how early to send its press, µs (its press delay and the link's time).
     pub press_lead_us: Vec<u64>,
+    /// Per key that plays velocity (a PWM key): how early to send its press at each velocity
+    /// (index 0..=127), µs, since a softer strike sounds later; empty (or a key past it) for
+    /// the `press_lead_us` of every velocity.
+    pub press_lead_by_velocity_us: Vec<Vec<u64>>,
     /// Per key: how early to send its release, µs.
     pub release_lead_us: Vec<u64>,
     /// Per key: the shortest press that sounds, µs. A press is never let go sooner, however
@@ -158,6 +162,8 @@ pub enum Planned {
         channel: u8,
         /// Its note.
         note_number: u8,
+        /// Its velocity.
+        velocity: u8,
         /// The note.
         note: NoteId,
         /// Why.
@@ -240,6 +246,8 @@ pub struct Skipped {
     pub channel: u8,
     /// Its note number.
     pub note_number: u8,
+    /// Its velocity (1..=127).
+    pub velocity: u8,
     /// When it would have sounded, wall µs, by the time map before the jump.
     pub score_at_us: i64,
 }
@@ -254,6 +262,29 @@ pub struct Jumped {
     pub passed: Vec<Skipped>,
 }
 
+impl PlanRules {
+    /// How early to send a press of `key` at `velocity`, µs.
+    pub fn press_lead(&self, key: usize, velocity: u8) -> u64 {
+        self.press_lead_by_velocity_us
+            .get(key)
+            .and_then(|l| l.get(usize::from(velocity)))
+            .or_else(|| self.press_lead_us.get(key))
+            .copied()
+            .unwrap_or(0)
+    }
+
+    /// The longest press lead of any key at any velocity, µs.
+    pub fn max_press_lead(&self) -> u64 {
+        let by_velocity = self.press_lead_by_velocity_us.iter().flatten();
+        self.press_lead_us
+            .iter()
+            .chain(by_velocity)
+            .copied()
+            .max()
+            .unwrap_or(0)
+    }
+}
+
 impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
     /// A planner of `source` (in score order) for a robot as `rules` say, with score time 0
     /// at wall time `start_us + lookahead` (so no send falls before `start_us`).
@@ -261,7 +292,7 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         let keys = rules.press_lead_us.len().max(rules.release_lead_us.len());
         let lead = |v: &[u64]| v.iter().copied().max().unwrap_or(0);
         let lookahead = if rules.compensation {
-            (lead(&rules.press_lead_us) + rules.restrike_gap_us).max(lead(&rules.release_lead_us))
+            (rules.max_press_lead() + rules.restrike_gap_us).max(lead(&rules.release_lead_us))
                 + rules.extra_lookahead_us
         } else {
             0
@@ -354,11 +385,12 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
                     score_at_us,
                     ..
                 } => {
-                    if let Some((ch, n, _)) = bytes.note_on() {
+                    if let Some((ch, n, v)) = bytes.note_on() {
                         jumped.unsent.push(Skipped {
                             note: id,
                             channel: ch,
                             note_number: n,
+                            velocity: v,
                             score_at_us,
                         });
                     }
@@ -367,12 +399,14 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
                     score_at_us,
                     channel,
                     note_number,
+                    velocity,
                     note,
                     ..
                 } => jumped.unsent.push(Skipped {
                     note,
                     channel,
                     note_number,
+                    velocity,
                     score_at_us,
                 }),
                 Planned::Send { .. } => {}
@@ -397,12 +431,13 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         self.source = source.peekable();
         self.next_note = 0;
         while let Some(e) = self.source.next_if(|e| e.score_us < target_us) {
-            if let Some((ch, n, _)) = e.bytes.note_on() {
+            if let Some((ch, n, v)) = e.bytes.note_on() {
                 if self.next_note >= read_before {
                     jumped.passed.push(Skipped {
                         note: self.next_note,
                         channel: ch,
                         note_number: n,
+                        velocity: v,
                         score_at_us: old.wall(e.score_us),
                     });
                 }
@@ -687,7 +722,8 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
             return;
         };
         let k = usize::from(land.key);
-        let lead = self.rules.press_lead_us.get(k).copied().unwrap_or(0) as i64;
+        let velocity = bytes.note_on().map_or(0, |(_, _, v)| v);
+        let lead = self.rules.press_lead(k, velocity) as i64;
         let gap = self.rules.restrike_gap_us as i64;
         let min_press = self.rules.min_press_us as i64;
         let p_des = w - lead;
@@ -819,6 +855,7 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
                 score_at_us: w,
                 channel: ch,
                 note_number: n,
+                velocity: bytes.note_on().map_or(0, |(_, _, v)| v),
                 note: id,
                 reason: DropReason::TooFast,
             })

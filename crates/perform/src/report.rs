@@ -47,6 +47,55 @@ impl Spread {
     }
 }
 
+/// How far the loudness of struck notes was from their velocity: |sounded − asked|, in MIDI
+/// velocity steps, median, 95th percentile (nearest rank) and largest.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct VelocityError {
+    /// The median.
+    pub median: u8,
+    /// The 95th percentile.
+    pub p95: u8,
+    /// The largest.
+    pub max: u8,
+    /// Struck notes that sounded louder than asked by more than
+    /// [`VELOCITY_TOLERANCE`](crate::VELOCITY_TOLERANCE) (2) steps.
+    pub louder: u64,
+    /// Struck notes that sounded softer than asked by more than 2 steps.
+    pub softer: u64,
+}
+
+impl VelocityError {
+    /// Over the notes of `records` whose own strike sounded on a key for which `dynamic` says
+    /// velocity counts (a PWM key); `None` if there are none.
+    pub fn of(records: &[NoteRecord], dynamic: impl Fn(u8) -> bool) -> Option<Self> {
+        let mut louder = 0;
+        let mut softer = 0;
+        let mut e: Vec<u8> = records
+            .iter()
+            .filter(|r| r.outcome.error_ms().is_some() && r.landing.is_some_and(|l| dynamic(l.key)))
+            .filter_map(|r| {
+                let heard = r.sounded_velocity?;
+                let off = heard.abs_diff(r.velocity) > crate::VELOCITY_TOLERANCE;
+                louder += u64::from(off && heard > r.velocity);
+                softer += u64::from(off && heard < r.velocity);
+                Some(heard.abs_diff(r.velocity))
+            })
+            .collect();
+        if e.is_empty() {
+            return None;
+        }
+        e.sort_unstable();
+        let rank = |p: f64| e[((p * e.len() as f64).ceil() as usize).clamp(1, e.len()) - 1];
+        Some(Self {
+            median: rank(0.5),
+            p95: rank(0.95),
+            max: e[e.len() - 1],
+            louder,
+            softer,
+        })
+    }
+}
+
 /// Notes dropped, by reason.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct Dropped {
@@ -58,6 +107,8 @@ pub struct Dropped {
     pub power: u64,
     /// A re-strike that could not sound within `late_limit`.
     pub too_fast: u64,
+    /// Struck too softly to sound: its duty below the key's softest (PWM keys only).
+    pub too_soft: u64,
     /// A waiting re-strike cancelled (taken over, reset, watchdog).
     pub cancelled: u64,
     /// Not played because the performance was stopped.
@@ -67,7 +118,13 @@ pub struct Dropped {
 impl Dropped {
     /// Every drop.
     pub fn total(&self) -> u64 {
-        self.channel + self.range + self.power + self.too_fast + self.cancelled + self.stopped
+        self.channel
+            + self.range
+            + self.power
+            + self.too_fast
+            + self.too_soft
+            + self.cancelled
+            + self.stopped
     }
 }
 
@@ -113,6 +170,7 @@ impl Outcomes {
                         orch_core::DropReason::TooFast => &mut d.too_fast,
                         orch_core::DropReason::Cancelled => &mut d.cancelled,
                         orch_core::DropReason::Stopped => &mut d.stopped,
+                        orch_core::DropReason::TooSoft => &mut d.too_soft,
                     } += 1;
                 }
             }
@@ -203,6 +261,9 @@ pub struct Report {
     /// The same without latency compensation, for comparison.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub onset_uncompensated_ms: Option<Spread>,
+    /// How far each struck note's loudness was from its velocity, on a robot with PWM keys
+    /// (`null` on an on/off robot, which ignores velocity).
+    pub velocity_error: Option<VelocityError>,
     /// The most keys down at once.
     pub peak_keys_down: u8,
     /// Presses too short for the key to sound.
@@ -262,8 +323,14 @@ impl Report {
             "joined                 {}   (its key was already held for another note: no strike of its own)",
             o.joined
         ));
+        // Too soft only where velocity plays (a robot with PWM keys), or if any was.
+        let too_soft = if self.velocity_error.is_some() || d.too_soft > 0 {
+            format!(", too soft {}", d.too_soft)
+        } else {
+            String::new()
+        };
         line(format!(
-            "dropped                {} (channel {}, range {}, power budget {}, too fast {}, cancelled {}, stopped {})",
+            "dropped                {} (channel {}, range {}, power budget {}, too fast {}{too_soft}, cancelled {}, stopped {})",
             d.total(),
             d.channel,
             d.range,
@@ -301,6 +368,12 @@ impl Report {
             self.cut_by_hold_limit, self.cut_by_duty_limit, self.cut_by_watchdog
         ));
         line(format!("onset error            {}", sp(&self.onset_ms)));
+        if let Some(v) = &self.velocity_error {
+            line(format!(
+                "velocity error         median {}, p95 {}, max {} steps ({} louder, {} softer than asked by more than 2)",
+                v.median, v.p95, v.max, v.louder, v.softer
+            ));
+        }
         if let Some(u) = &self.onset_uncompensated_ms {
             line(format!("  without compensation {}", sp(u)));
         }

@@ -7,7 +7,7 @@
 //! [`SimBoards`] (the virtual robot, driven through `orch-boards`' own driver so the real
 //! driver runs in every play), or real boards.
 
-use orch_boards::FingerBoardSet;
+use orch_boards::MixedBoardSet;
 use orch_core::{Config, FingerBoards, Instant, Interpreter, NoteEvent};
 use orch_sim::{BusError, Performance, SimConfig, VirtualRobot};
 
@@ -19,8 +19,17 @@ pub const MAX_KEYS: usize = 128;
 /// The interpreter as a host runs it: room for any configuration.
 pub type HostInterpreter = Interpreter<MAX_BOARDS, MAX_KEYS>;
 
-/// The virtual robot behind `orch-boards`' PCA9555 driver.
-pub type SimBoards = FingerBoardSet<VirtualRobot, MAX_BOARDS>;
+/// The virtual robot behind `orch-boards`' drivers (PCA9555 and PCA9685 boards, as its
+/// configuration says).
+pub type SimBoards = MixedBoardSet<VirtualRobot, MAX_BOARDS>;
+
+/// The PCA9685's 500 µs oscillator start-up at initialisation: the virtual chip needs no
+/// wait (its model applies a duty at once), so none is spent.
+struct NoWait;
+
+impl embedded_hal::delay::DelayNs for NoWait {
+    fn delay_ns(&mut self, _ns: u32) {}
+}
 
 /// What goes wrong on a local robot.
 #[derive(Debug)]
@@ -72,14 +81,19 @@ impl Boards for SimBoards {
 /// A virtual robot as `sim` says, with its boards initialised through the driver at t = 0.
 pub fn sim_boards(sim: &SimConfig) -> Result<SimBoards, RobotError<orch_boards::Error<BusError>>> {
     let robot = VirtualRobot::new(sim.clone());
-    let addresses: Vec<u8> = sim.boards.iter().map(|b| b.address).collect();
-    let mut set = SimBoards::with_boards(robot, &addresses).ok_or(RobotError::Config(
+    let boards: Vec<(u8, orch_core::BoardKind)> = sim
+        .boards
+        .iter()
+        .enumerate()
+        .map(|(i, b)| (b.address, sim.kind(i)))
+        .collect();
+    let mut set = SimBoards::with_boards(robot, &boards).ok_or(RobotError::Config(
         orch_core::ConfigError::TooManyKeys {
-            keys: addresses.len(),
+            keys: boards.len(),
             capacity: MAX_BOARDS,
         },
     ))?;
-    set.init()
+    set.init(sim.pwm_hz, &mut NoWait)
         .map_err(|error| RobotError::Board { address: 0, error })?;
     Ok(set)
 }
@@ -101,6 +115,9 @@ pub struct LocalRobot<B: Boards> {
     /// The instant whose changes are not yet on the boards.
     batch: Option<u64>,
     decided: Vec<Decided>,
+    /// Some key plays velocity (a PWM key): the boards get duties
+    /// ([`Interpreter::flush_duties`]), not on/off frames.
+    duties: bool,
 }
 
 impl<B: Boards> LocalRobot<B> {
@@ -111,6 +128,7 @@ impl<B: Boards> LocalRobot<B> {
             boards,
             batch: None,
             decided: Vec::new(),
+            duties: !config.dynamics.is_on_off(),
         })
     }
 
@@ -205,13 +223,15 @@ impl<B: Boards> LocalRobot<B> {
 
     fn flush(&mut self, t_us: u64) -> Result<(), RobotError<B::Error>> {
         self.boards.set_time(Instant::from_micros(t_us));
-        self.interp
-            .flush(&mut self.boards)
-            .map(|_| ())
-            .map_err(|e| RobotError::Board {
-                address: e.board.address,
-                error: e.error,
-            })
+        let flushed = if self.duties {
+            self.interp.flush_duties(&mut self.boards)
+        } else {
+            self.interp.flush(&mut self.boards)
+        };
+        flushed.map(|_| ()).map_err(|e| RobotError::Board {
+            address: e.board.address,
+            error: e.error,
+        })
     }
 
     /// Whether each key is down now.

@@ -234,12 +234,18 @@ hold = "35%"
 
 /// The default configuration with every board of the `kind` given: [`DEFAULT_TOML`] for
 /// on/off boards; for PWM boards, four PCA9685 boards at 0x40..=0x43 (the chip's first
-/// addresses) driving the same 61 keys (16/16/16/13). What `orch config --boards` prints.
+/// addresses) driving the same 61 keys (16/16/16/13), on a 1 MHz bus. What
+/// `orch config --boards` prints.
 pub fn default_toml(kind: BoardKind) -> String {
     match kind {
         BoardKind::OnOff => DEFAULT_TOML.to_string(),
         BoardKind::Pwm => {
-            let mut text = DEFAULT_TOML.replace("kind = \"pca9555\"", "kind = \"pca9685\"");
+            // A PCA9685 takes Fast-mode Plus: at 1 MHz a chord's write (the run of channels
+            // that changed, all switched at its STOP) costs a third of the time it takes at
+            // 400 kHz, so chords stay on time.
+            let mut text = DEFAULT_TOML
+                .replace("kind = \"pca9555\"", "kind = \"pca9685\"")
+                .replace("clock = \"400kHz\"", "clock = \"1MHz\"");
             for (from, to) in [(0x21, 0x40), (0x22, 0x41), (0x23, 0x42), (0x24, 0x43)] {
                 text = text.replace(
                     &format!("address = {from:#04x}"),

@@ -43,6 +43,7 @@ fn the_pca9685_default_is_four_pwm_boards_with_the_peers_curve() {
     assert_eq!(r.config.range.keys(), 61);
     assert!(r.has_dynamics());
     assert_eq!(r.pwm_hz, 1_526);
+    assert_eq!(r.clock, orch_sim::BusClock::from_hz(1_000_000));
     assert_eq!(r.config.dynamics.strike, Duration::from_millis(40));
     for key in 0..61 {
         assert_eq!(

@@ -144,3 +144,31 @@ impl<F: FnMut(&Control)> orch_seq::Clock for ActAt<F> {
         self.inner.lateness()
     }
 }
+
+/// The thesis's 61 keys on four PCA9685 boards (0x40..=0x43) with the default dynamics (strike
+/// at 45..100 % by velocity, hold at 35 %), on a 1 MHz bus, with `mechanics` for the keys.
+pub fn pwm_setup(mechanics: orch_sim::MechanicsConfig, compensation: bool) -> Setup {
+    let mut config = Config {
+        dynamics: orch_core::Dynamics::PWM,
+        ..thesis_config()
+    };
+    for (i, b) in config.layout.boards.iter_mut().take(4).enumerate() {
+        b.address = 0x40 + i as u8;
+    }
+    let sim = orch_sim::SimConfig {
+        clock: orch_sim::BusClock::from_hz(1_000_000),
+        mechanics,
+        kinds: vec![orch_core::BoardKind::Pwm; 4],
+        ..orch_sim::SimConfig::thesis().with_layout(&config.layout)
+    };
+    Setup {
+        config,
+        sim: orch_sim::SimConfig {
+            boards: sim.boards[..4].to_vec(),
+            ..sim
+        },
+        compensation,
+        tempo: Tempo::NORMAL,
+        link: Link::Direct,
+    }
+}
