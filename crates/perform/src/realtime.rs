@@ -131,3 +131,26 @@ pub fn spawn<T: Send + 'static>(
         })
         .expect("a thread can be started")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_precise_wait_ends_at_a_ring_and_otherwise_at_its_deadline() {
+        let bell = std::sync::Arc::new(Bell::new());
+        let mut c = PreciseClock::new();
+        let seen = bell.rung();
+        let b = std::sync::Arc::clone(&bell);
+        let ringer = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(20));
+            b.ring();
+        });
+        assert!(c.wait_until_rung(5_000_000, &bell, seen));
+        assert!(c.now_us() < 2_000_000, "{}", c.now_us());
+        ringer.join().unwrap();
+        let now = c.now_us();
+        assert!(!c.wait_until_rung(now + 10_000, &bell, bell.rung()));
+        assert!(c.now_us() >= now + 10_000);
+    }
+}

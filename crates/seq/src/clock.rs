@@ -197,6 +197,31 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_real_clock_wait_ends_at_a_ring_and_otherwise_at_its_deadline() {
+        let bell = std::sync::Arc::new(Bell::new());
+        let mut c = RealClock::new();
+        let seen = bell.rung();
+        let b = std::sync::Arc::clone(&bell);
+        let ringer = thread::spawn(move || {
+            thread::sleep(Duration::from_millis(20));
+            b.ring();
+        });
+        // A deadline 5 s off: the ring ends the wait long before.
+        assert!(c.wait_until_rung(5_000_000, &bell, seen));
+        assert!(c.now_us() < 2_000_000, "{}", c.now_us());
+        ringer.join().unwrap();
+        // No ring: the deadline, never early.
+        let now = c.now_us();
+        assert!(!c.wait_until_rung(now + 10_000, &bell, bell.rung()));
+        assert!(c.now_us() >= now + 10_000);
+        // The default (a virtual clock): a ring already there ends it, else the deadline.
+        let mut v = VirtualClock::new();
+        assert!(v.wait_until_rung(1_000, &bell, seen));
+        assert!(!v.wait_until_rung(1_000, &bell, bell.rung()));
+        assert_eq!(v.now_us(), 1_000);
+    }
+
+    #[test]
     fn virtual_clock_jumps_to_deadlines_and_reports_past_ones() {
         let mut c = VirtualClock::new();
         assert_eq!(c.wait_until(1_000), 0);
