@@ -368,3 +368,99 @@ fn bad_sources_exit_2() {
         );
     }
 }
+
+/// The arrival of each Note-On (velocity above 0) in the datagrams `socket` receives.
+fn note_on_arrivals(socket: std::net::UdpSocket, tx: std::sync::mpsc::Sender<Instant>) {
+    let mut buf = [0u8; 2048];
+    let (mut status, mut data) = (0u8, Vec::new());
+    while let Ok(n) = socket.recv(&mut buf) {
+        let at = Instant::now();
+        for &b in &buf[..n] {
+            match b {
+                0xF8..=0xFF => {}
+                0x80..=0xF7 => {
+                    status = b;
+                    data.clear();
+                }
+                _ => {
+                    data.push(b);
+                    let len = if matches!(status & 0xF0, 0xC0 | 0xD0) {
+                        1
+                    } else {
+                        2
+                    };
+                    if data.len() == len {
+                        if status & 0xF0 == 0x90 && data[1] > 0 && tx.send(at).is_err() {
+                            return;
+                        }
+                        data.clear();
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn osc_beats_over_loopback_changing_from_100_to_130_bpm_are_followed_within_25_ms() {
+    // On the real clock: `orch conduct` plays 40 quarters written at 100 BPM, each message
+    // sent at its time (no compensation: what arrives on the UDP output is when the robot
+    // is told to strike); a conductor sends `/orch/beat` over loopback, one a beat after the
+    // first note, 16 beats at 100 BPM, then 16 at 130. Each note against the beat it belongs
+    // to (note k, beat k; the beat's time is when it was sent): within 25 ms at the steady
+    // tempo, and from the third beat after the change is recognised (its second beat) on.
+    let file = scratch("osc-beats.mid");
+    std::fs::write(&file, support::quarters_smf(40, 100.0)).unwrap();
+    let sink = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let out = sink.local_addr().unwrap();
+    let (tx, arrivals) = std::sync::mpsc::channel();
+    std::thread::spawn(move || note_on_arrivals(sink, tx));
+    let port = std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let child = Command::new(env!("CARGO_BIN_EXE_orch"))
+        .args(["conduct", file.to_str().unwrap(), "--source"])
+        .arg(format!("osc:{port}"))
+        .args(["--no-view", "--json", "--no-compensation", "--follow", "phase"])
+        .arg("--out")
+        .arg(format!("udp:{out}"))
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let tx = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let beat = orch_perform::conduct::encode_osc("/orch/beat", &[]);
+    let first = arrivals.recv_timeout(Duration::from_secs(10)).unwrap();
+    let mut beats = vec![first];
+    let mut due = first;
+    for k in 1..=32 {
+        due += Duration::from_secs_f64(if k <= 16 { 0.6 } else { 60.0 / 130.0 });
+        std::thread::sleep(due.saturating_duration_since(Instant::now()));
+        beats.push(Instant::now());
+        tx.send_to(&beat, ("127.0.0.1", port)).unwrap();
+    }
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{out:?}");
+    all_struck(&out.stdout, 40);
+    let mut notes = vec![first];
+    notes.extend(arrivals.try_iter());
+    assert_eq!(notes.len(), 40);
+    let e: Vec<f64> = beats
+        .iter()
+        .zip(&notes)
+        .map(|(b, n)| {
+            if n >= b {
+                (*n - *b).as_secs_f64() * 1000.0
+            } else {
+                -(*b - *n).as_secs_f64() * 1000.0
+            }
+        })
+        .collect();
+    println!("OSC beats over loopback, 100 -> 130 BPM: note - beat, ms: {e:.1?}");
+    for (k, x) in e.iter().enumerate() {
+        if k <= 16 || k >= 21 {
+            assert!(x.abs() <= 25.0, "beat {k}: {e:.1?}");
+        }
+    }
+}
