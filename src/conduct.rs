@@ -448,9 +448,15 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
         let (opened_tx, opened) = mpsc::channel();
         let spec = spec.clone();
         let taps = tap.then_some(tap_rx);
+        // A source that only waits for its input (not a video to decode) reads at the
+        // sender's priority: a cue is not left waiting behind other work on the machine.
+        let urgent = !matches!(spec, SourceSpec::Baton(_) | SourceSpec::Camera(_));
         // Detached: a source blocked on its input ends with the process.
         std::thread::spawn(move || match open_source(&spec, &control, stamp, taps) {
             Ok(source) => {
+                if urgent {
+                    orch_perform::realtime::raise_priority();
+                }
                 let _ = opened_tx.send(Ok(()));
                 follow(source, follower, &control, &status);
             }

@@ -423,7 +423,13 @@ fn osc_beats_over_loopback_changing_from_100_to_130_bpm_are_followed_within_25_m
     let child = Command::new(env!("CARGO_BIN_EXE_orch"))
         .args(["conduct", file.to_str().unwrap(), "--source"])
         .arg(format!("osc:{port}"))
-        .args(["--no-view", "--json", "--no-compensation", "--follow", "phase"])
+        .args([
+            "--no-view",
+            "--json",
+            "--no-compensation",
+            "--follow",
+            "phase",
+        ])
         .arg("--out")
         .arg(format!("udp:{out}"))
         .stdout(Stdio::piped())
