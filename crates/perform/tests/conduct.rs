@@ -379,6 +379,9 @@ fn an_accelerando_is_followed_within_25_ms_from_its_third_beat() {
     }
 }
 
+/// A change made to a conductor's beats.
+type Change = dyn Fn(&mut Vec<u64>);
+
 /// The conductor at 110 BPM over a score written at 100, 24 beats: the notes' sounds as
 /// conducted, and with `change` made to the beats.
 fn with_and_without(change: impl Fn(&mut Vec<u64>)) -> (Run, Run, Vec<u64>) {
@@ -405,7 +408,7 @@ fn a_missed_or_invented_beat_moves_no_note_by_more_than_25_ms() {
     let (plain, _, beats) = with_and_without(|_| {});
     let e = plain.errors_ms(&beats);
     assert!(worst(&e, 3..25) <= 25.0, "{e:.1?}");
-    let cases: [(&str, Box<dyn Fn(&mut Vec<u64>)>); 4] = [
+    let cases: [(&str, Box<Change>); 4] = [
         (
             "missed beat 12",
             Box::new(|b| {
