@@ -25,7 +25,7 @@
 //! last from 0.76 to 1.24 of the conductor's, so no beat of it is longer or shorter than the
 //! conductor's by as much as a sixteenth note (0.25 beat). That makes up to 0.32 of a beat
 //! when behind and 0.19 when ahead in one beat (0.15 before): the error an abrupt change of
-//! 30 % leaves while it is confirmed (about 0.4 beat behind, 0.55 ahead) is gone in two and
+//! 30 % leaves while it is confirmed (about 0.35 beat behind, 0.5 ahead) is gone in two and
 //! three beats.
 //!
 //! A beat held back as odd and late (more than a period late, less than two: a slowing down
