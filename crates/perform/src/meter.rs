@@ -29,6 +29,9 @@
 //!     it, and its interval from the odd beat is the new period if it is not in time with
 //!     the old one.
 //!
+//! A beat not after the last one heard (the same beat sent twice) is ignored (odd, and not
+//! held back).
+//!
 //! Two intervals that agree but together make one period (an invented beat at exactly half a
 //! beat) are taken as one beat split in two, not as a doubling of the tempo: the first rule
 //! is asked before the second.
@@ -110,9 +113,13 @@ impl Meter {
 
     /// A beat at `t_us` (its own time: the ictus).
     pub fn beat(&mut self, t_us: u64) -> Heard {
-        let Some(last) = self.last.filter(|&l| t_us > l) else {
+        let Some(last) = self.last else {
             return self.restart_at(t_us);
         };
+        if t_us <= last || self.odd.is_some_and(|o| t_us <= o) {
+            // Not after the beats before it (a beat sent twice): ignored.
+            return Heard::Odd { late: false };
+        }
         let interval = (t_us - last) as f64;
         let Some(period) = self.period else {
             // The second beat: the first interval is the period.
@@ -255,6 +262,9 @@ mod tests {
         }
         let (v, m) = hear(&[0, 600, 1200, 2400, 3000]);
         assert_eq!(v[3..], [Heard::InTime { beats: 2 }, IN]);
+        // A beat sent twice: the second is ignored, the count goes on.
+        let (v, _) = hear(&[0, 600, 1200, 1200, 1800]);
+        assert_eq!(v[3..], [Heard::Odd { late: false }, IN]);
         assert!((m.period().unwrap() - 600_000.0).abs() < 1.0);
         // A fermata: a beat 2.5 s late, then the tempo as before: the phase starts again
         // there, the period stands.
