@@ -5,18 +5,22 @@
 //! written at 240 BPM (one every 250 ms) with `--source osc:PORT --follow immediate`, its
 //! only output `--out udp:127.0.0.1:PORT2`: every MIDI message it sends arrives as a datagram
 //! here, stamped on arrival. The piece steadies at its written tempo; then, 15 to 25 ms (spread
-//! over the samples, so that the performer's 5-ms wake is met at every phase) before a
-//! press is due, this program writes an OSC `/orch/beat 4800.0` (a beat at twenty times the
-//! tempo) on the source's UDP socket. At twenty times the tempo that press is due at once,
-//! so the time from writing the beat to that press's arrival here is the whole path: the
-//! source's thread reading and decoding the packet, the follower, the performance's control,
-//! the performer's next wake (every 5 ms in `orch conduct`), its replanning and its send, and
-//! the loopback datagram (tens of µs). A `/orch/beat 240.0` then puts the written tempo back
-//! and the next sample waits for the tempo to steady.
+//! over the samples) before a press is due, this program writes an OSC `/orch/beat 4800.0` (a
+//! beat stating twenty times the tempo) on the source's UDP socket. At twenty times the tempo
+//! that press is due at once, so the time from writing the beat to that press's arrival here
+//! is the whole path: the source's thread reading and decoding the packet, the follower, the
+//! performance's control ringing its bell, the performer waking on it (no poll), its
+//! replanning and its send, and the loopback datagram (tens of µs). A `/orch/beat 240.0` then
+//! puts the written tempo back and the next sample waits for the tempo to steady.
+//!
+//! With `busy`, a thread spinning on every core (as many as the machine has) competes with
+//! `orch conduct` for the whole run. The bench's own two threads (writing the beats, stamping
+//! the presses) ask for real-time priority as orch's sender and its OSC source do, so that
+//! the figure is orch's, not the bench's wait for a core.
 //!
 //! ```sh
 //! cargo build --release --bin orch --example conduct_latency
-//! target/release/examples/conduct_latency target/release/orch [SAMPLES]
+//! target/release/examples/conduct_latency target/release/orch [SAMPLES] [busy]
 //! ```
 //!
 //! Prints the median, 99th percentile and largest latency over the samples (40 by default).
@@ -34,8 +38,7 @@ use orch_perform::conduct::{encode_osc, OscArg};
 /// The piece's beat, ms (240 BPM).
 const BEAT_MS: u64 = 250;
 /// How long before a due press the beat is written: 15 ms and up to 10 ms more, spread
-/// evenly over the samples (the performer wakes every 5 ms from its last send: a fixed offset
-/// would always meet the same phase of its wake).
+/// evenly over the samples (so that no one phase of the performer's waits is measured alone).
 const AHEAD_US: u64 = 15_000;
 const SPREAD_US: u64 = 10_000;
 
@@ -100,6 +103,22 @@ fn main() {
         .next()
         .expect("usage: conduct_latency PATH/TO/orch [SAMPLES]");
     let samples: usize = args.next().map_or(40, |s| s.parse().expect("SAMPLES"));
+    let busy = args.next().is_some_and(|a| a == "busy");
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let cores = if busy {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        0
+    };
+    for _ in 0..cores {
+        let stop = std::sync::Arc::clone(&stop);
+        std::thread::spawn(move || {
+            let mut x = 0u64;
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
+            }
+        });
+    }
     let dir = std::env::temp_dir().join(format!("orch-conduct-latency-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("a scratch folder");
     let file = dir.join("quarters-240.mid");
@@ -113,7 +132,13 @@ fn main() {
     let sink = UdpSocket::bind("127.0.0.1:0").expect("a UDP socket for the output");
     let out = sink.local_addr().expect("its address");
     let (tx, arrivals) = mpsc::channel();
-    std::thread::spawn(move || note_ons(sink, tx));
+    // The bench's own threads (this one writes the beats, that one stamps the presses) at
+    // real-time priority where allowed, as orch's are: the busy threads delay neither.
+    std::thread::spawn(move || {
+        orch_perform::realtime::raise_priority();
+        note_ons(sink, tx)
+    });
+    orch_perform::realtime::raise_priority();
     let osc_port = free_port();
     let _child = Killed(
         Command::new(&orch)
@@ -175,10 +200,16 @@ fn main() {
     latency.sort_by(f64::total_cmp);
     let rank =
         |p: f64| latency[((p * latency.len() as f64).ceil() as usize).clamp(1, latency.len()) - 1];
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
     println!(
         "OSC /orch/beat written on a UDP socket -> the press it retimed sent by orch conduct \
-         (arriving on a UDP socket, same host), {} samples: median {:.2} ms, p99 {:.2} ms, \
+         (arriving on a UDP socket, same host), {}, {} samples: median {:.2} ms, p99 {:.2} ms, \
          max {:.2} ms",
+        if busy {
+            format!("a busy thread on each of {cores} cores")
+        } else {
+            "idle".to_string()
+        },
         latency.len(),
         rank(0.5),
         rank(0.99),

@@ -192,6 +192,8 @@ pub struct ConductArgs {
     #[arg(long, value_name = "SOURCE")]
     pub source: String,
     /// Follow the conductor's rate only (immediate), or also pull the phase toward each beat.
+    /// Either way the tempo is measured from the beats' times: a sustained change is taken
+    /// at its second beat, a single odd beat (missed, invented, a fermata) never.
     #[arg(long, value_enum, default_value_t = FollowMode::Phase)]
     pub follow: FollowMode,
     /// Start at this bar (from 1, as the view counts bars); the notes before it are counted

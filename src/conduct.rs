@@ -227,9 +227,11 @@ impl TempoSource for BatonVideo {
                 std::thread::sleep(Duration::from_micros(due - now));
             }
             if let Some(b) = self.baton.push(t_ms, &self.frame) {
+                // The ictus's own time (the tracker confirms it two frames later): the
+                // follower measures the tempo from these times, as for every source.
                 let cue = Cue::Beat {
                     t_us: start + (b.t_ms * 1000.0).round().max(0.0) as u64,
-                    bpm: b.bpm,
+                    bpm: None,
                 };
                 return Ok(Some(Timed {
                     t_us: self.stamp.now_us(),
@@ -314,7 +316,7 @@ pub fn follow(
         if control.stopping() {
             return;
         }
-        let action = follower.cue(&cue.cue, control.time_map().as_ref());
+        let action = follower.cue(&cue, control.time_map().as_ref());
         let bpm = follower.bpm();
         let is_beat = matches!(cue.cue, Cue::Beat { .. });
         action.apply(control, cue.t_us);
@@ -433,9 +435,8 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
         FollowMode::Phase => Follow::PHASE,
     };
     let follower = Follower::new(ScoreBeats::of(&song), follow_mode);
+    // A conductor's change rings the control's bell: the performer wakes and takes it at once.
     let control = Control::new();
-    // A conductor's change is taken within 5 ms (the view is still drawn every 20 ms).
-    control.poll_every(5_000);
     let origin = Instant::now();
     let stamp = Stamp(origin);
     let (tap_tx, tap_rx) = mpsc::channel();
@@ -447,9 +448,15 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
         let (opened_tx, opened) = mpsc::channel();
         let spec = spec.clone();
         let taps = tap.then_some(tap_rx);
+        // A source that only waits for its input (not a video to decode) reads at the
+        // sender's priority: a cue is not left waiting behind other work on the machine.
+        let urgent = !matches!(spec, SourceSpec::Baton(_) | SourceSpec::Camera(_));
         // Detached: a source blocked on its input ends with the process.
         std::thread::spawn(move || match open_source(&spec, &control, stamp, taps) {
             Ok(source) => {
+                if urgent {
+                    orch_perform::realtime::raise_priority();
+                }
                 let _ = opened_tx.send(Ok(()));
                 follow(source, follower, &control, &status);
             }

@@ -11,52 +11,34 @@
 //! ([`MidiClock`]), OSC ([`parse_osc`]), tap tempo ([`TapTempo`]); the I/O around them (a
 //! file, standard input, a UDP port, a key, a video through `orch-baton`) is the front end's.
 //!
-//! The **follower** ([`Follower`]) turns each cue into a tempo factor for
-//! [`Control::set_tempo`](crate::Control::set_tempo), with the score's own tempo as 1.0. The
-//! conductor's beats are quarter notes (MIDI clock counts 24 to the quarter). Two modes
-//! ([`Follow`]):
+//! The **follower** ([`Follower`], in [`follow`](crate::follow)) turns each cue into a tempo
+//! factor for [`Control::set_tempo`](crate::Control::set_tempo), with the score's own tempo
+//! as 1.0. The conductor's beats are quarter notes (MIDI clock counts 24 to the quarter). The
+//! sources give beat times; the tempo is measured from them by the follower, by one rule for
+//! every source ([`meter`](crate::meter)): a sustained change is taken at its second beat, a
+//! single odd interval never. Two modes ([`Follow`]): the rate only, or the rate and the
+//! phase.
 //!
-//! - **Immediate**: the factor is the conductor's BPM over the score's BPM at the present
-//!   point. The rate follows; any phase difference (the performance a little ahead of or
-//!   behind the baton) stays as it is.
-//! - **Phase-following**: the rate as above, and each beat also pulls the playback's phase
-//!   toward the beat. At a beat (its own time, the ictus's, not the time it was recognised),
-//!   the score position is compared with the nearest quarter of the score: an error of `e`
-//!   beats (positive: the performance is ahead) gives a factor `rate × (1 − gain × e)`, with
-//!   `gain × e` limited to ±`limit`. Held for one beat, that makes up `gain × e` beats of
-//!   the error. Defaults: [`PHASE_GAIN`] (half the error each beat) and [`PHASE_LIMIT`] (at
-//!   most 0.15 of a beat each beat, the factor moved by at most ±15 %: a beat never makes
-//!   the music lurch by as much as a sixteenth note; a larger error takes a few beats).
-//!
-//! Score time stays continuous under both (see [`TimeMap`]): a tempo change never skips,
+//! Score time stays continuous under both (see [`TimeMap`](crate::TimeMap)): a tempo change never skips,
 //! repeats or reorders a note.
 
 use std::collections::VecDeque;
 
-use crate::tempo::{Tempo, TimeMap};
-
-/// The phase-following gain: the share of a beat's phase error made up over the next beat.
-pub const PHASE_GAIN: f64 = 0.5;
-
-/// The phase-following limit: the most one beat may pull the phase, in beats (a factor
-/// change of at most ±15 % over one beat).
-pub const PHASE_LIMIT: f64 = 0.15;
-
-/// The tempo factors the follower gives: a twentieth to twenty times as written (as
-/// `orch play --tempo` takes).
-pub const FACTOR_RANGE: (f64, f64) = (0.05, 20.0);
+pub use crate::follow::{Follow, Follower, FACTOR_RANGE, PHASE_CATCH_UP, PHASE_GAIN, PHASE_LIMIT};
+use crate::tempo::Tempo;
 
 /// What a conductor said.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Cue {
     /// Play at this tempo, in quarter notes a minute.
     Tempo(f64),
-    /// A beat (a quarter note) fell at `t_us` on the performer's clock; `bpm`, the tempo the
-    /// source measured there, if it knows one.
+    /// A beat (a quarter note) fell at `t_us` on the performer's clock; `bpm`, a tempo the
+    /// conductor states with it (an OSC `/orch/beat BPM`), if any. The follower measures the
+    /// tempo from the beats' times otherwise: no source measures it for the follower.
     Beat {
         /// The beat's own time (the ictus), µs.
         t_us: u64,
-        /// The tempo there, quarter notes a minute.
+        /// The tempo stated with it, quarter notes a minute.
         bpm: Option<f64>,
     },
     /// MIDI Start (0xFA): play from the beginning.
@@ -122,8 +104,9 @@ pub trait TempoSource {
 /// skipped (real-time bytes may come anywhere, even inside a Song Position message).
 ///
 /// While running (after Start or Continue) every 24th clock is a [`Cue::Beat`], the first
-/// being the first clock after Start, at the time of that clock, with the tempo of the last
-/// 24 clocks. Clock without Start gives [`Cue::Tempo`] every 24 clocks.
+/// being the first clock after Start, at the time of that clock; the follower measures the
+/// tempo from those beats, as from any source's. Clock without Start (no position to follow)
+/// gives [`Cue::Tempo`] every 24 clocks, the tempo of the last 24.
 #[derive(Clone, Debug, Default)]
 pub struct MidiClock {
     running: bool,
@@ -165,10 +148,7 @@ impl MidiClock {
                 let beat = self.ticks % Self::PER_QUARTER == 0;
                 self.ticks = self.ticks.wrapping_add(1);
                 match (beat, self.running) {
-                    (true, true) => Some(Cue::Beat {
-                        t_us,
-                        bpm: self.bpm(),
-                    }),
+                    (true, true) => Some(Cue::Beat { t_us, bpm: None }),
                     (true, false) => self.bpm().map(Cue::Tempo),
                     _ => None,
                 }
@@ -211,41 +191,29 @@ impl MidiClock {
     }
 }
 
-/// Tap tempo: each tap is a beat, its tempo the mean of the last (up to) four intervals. A
-/// pause of more than [`TapTempo::RESTART_US`] starts counting again.
+/// Tap tempo: each tap is a beat at its time. The follower measures the tempo from the taps
+/// as from any source's beats (a sustained change taken at its second interval, one odd tap
+/// ignored, a long pause a new start).
 #[derive(Clone, Debug, Default)]
 pub struct TapTempo {
-    taps: VecDeque<u64>,
+    taps: u64,
 }
 
 impl TapTempo {
-    /// The longest interval between two taps that still counts (2 s: 30 BPM).
-    pub const RESTART_US: u64 = 2_000_000;
-
     /// No taps yet.
     pub fn new() -> Self {
         Self::default()
     }
 
+    /// Taps so far.
+    pub fn taps(&self) -> u64 {
+        self.taps
+    }
+
     /// A tap at `t_us`.
     pub fn tap(&mut self, t_us: u64) -> Cue {
-        if self
-            .taps
-            .back()
-            .is_some_and(|&l| t_us <= l || t_us - l > Self::RESTART_US)
-        {
-            self.taps.clear();
-        }
-        self.taps.push_back(t_us);
-        if self.taps.len() > 5 {
-            self.taps.pop_front();
-        }
-        let n = self.taps.len();
-        let bpm = (n >= 2).then(|| {
-            let span = (self.taps[n - 1] - self.taps[0]) as f64;
-            60e6 * (n - 1) as f64 / span
-        });
-        Cue::Beat { t_us, bpm }
+        self.taps += 1;
+        Cue::Beat { t_us, bpm: None }
     }
 }
 
@@ -417,17 +385,22 @@ pub fn encode_osc(address: &str, args: &[OscArg]) -> Vec<u8> {
 }
 
 /// OSC to cues: `/orch/tempo f` (BPM, `i` and `d` too) is a [`Cue::Tempo`]; `/orch/beat`
-/// (with an optional BPM) is a beat at the packet's arrival, its tempo from the beats before
-/// it (as tap tempo) unless it says one. Other addresses are ignored.
+/// is a beat at the packet's arrival, with the tempo it states if it has an argument (the
+/// follower measures the tempo from the beats' times otherwise). Other addresses are ignored.
 #[derive(Clone, Debug, Default)]
 pub struct OscCues {
-    beats: TapTempo,
+    beats: u64,
 }
 
 impl OscCues {
     /// No beats yet.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Beats received so far.
+    pub fn beats(&self) -> u64 {
+        self.beats
     }
 
     /// The cues of a packet received at `t_us`.
@@ -441,15 +414,10 @@ impl OscCues {
                     _ => return Err(OscError("/orch/tempo needs a tempo above 0".into())),
                 },
                 "/orch/beat" => {
-                    let cue = self.beats.tap(t_us);
-                    cues.push(match (cue, n) {
-                        (Cue::Beat { t_us, .. }, Some(bpm)) if bpm.is_finite() && bpm > 0.0 => {
-                            Cue::Beat {
-                                t_us,
-                                bpm: Some(bpm),
-                            }
-                        }
-                        (c, _) => c,
+                    self.beats += 1;
+                    cues.push(Cue::Beat {
+                        t_us,
+                        bpm: n.filter(|b| b.is_finite() && *b > 0.0),
                     });
                 }
                 _ => {}
@@ -526,28 +494,6 @@ impl ScoreBeats {
     }
 }
 
-/// How the follower follows. See the [module notes](self).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Follow {
-    /// The rate only.
-    Immediate,
-    /// The rate, and each beat pulls the phase.
-    Phase {
-        /// The share of the phase error made up over the next beat.
-        gain: f64,
-        /// The most one beat may pull, in beats.
-        limit: f64,
-    },
-}
-
-impl Follow {
-    /// Phase-following with [`PHASE_GAIN`] and [`PHASE_LIMIT`].
-    pub const PHASE: Follow = Follow::Phase {
-        gain: PHASE_GAIN,
-        limit: PHASE_LIMIT,
-    };
-}
-
 /// What the performance should do after a cue.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Action {
@@ -581,67 +527,12 @@ impl Action {
     }
 }
 
-/// Turns cues into tempo factors. See the [module notes](self).
-#[derive(Clone, Debug)]
-pub struct Follower {
-    beats: ScoreBeats,
-    follow: Follow,
-    bpm: Option<f64>,
-}
-
-impl Follower {
-    /// A follower of a score whose quarter notes are `beats`.
-    pub fn new(beats: ScoreBeats, follow: Follow) -> Self {
-        Self {
-            beats,
-            follow,
-            bpm: None,
-        }
-    }
-
-    /// The conductor's tempo, as last heard (quarter notes a minute).
-    pub fn bpm(&self) -> Option<f64> {
-        self.bpm
-    }
-
-    /// What to do about `cue`, the performance's time map being `map` (`None` before it
-    /// starts: then only a tempo can be taken).
-    pub fn cue(&mut self, cue: &Cue, map: Option<&TimeMap>) -> Action {
-        let (bpm, beat_at) = match *cue {
-            Cue::Tempo(bpm) => (Some(bpm), None),
-            Cue::Beat { t_us, bpm } => (bpm, Some(t_us)),
-            Cue::Stop => return Action::Pause,
-            Cue::Start => return Action::Start,
-            Cue::Continue => return Action::Resume,
-            // MIDI beats are sixteenth notes: four to the quarter.
-            Cue::SongPosition(p) => return Action::Jump(self.beats.time_of(f64::from(p) / 4.0)),
-        };
-        let Some(bpm) = bpm.filter(|b| b.is_finite() && *b > 0.0) else {
-            return Action::Nothing;
-        };
-        self.bpm = Some(bpm);
-        let now_score = map.map_or(0, |m| m.score(beat_at.unwrap_or(0) as i64));
-        let mut factor = bpm / self.beats.bpm(now_score);
-        if let (Follow::Phase { gain, limit }, Some(t), Some(m)) = (self.follow, beat_at, map) {
-            let (pos, _) = self.beats.at(m.score(t as i64));
-            // Before the first beat of the score the conductor is giving an upbeat: no pull.
-            if pos > 0.0 {
-                let err = pos - pos.round();
-                let pull = (-gain * err).clamp(-limit, limit);
-                factor *= 1.0 + pull;
-            }
-        }
-        let factor = factor.clamp(FACTOR_RANGE.0, FACTOR_RANGE.1);
-        Tempo::new(factor).map_or(Action::Nothing, Action::Tempo)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn midi_clock_beats_every_24_clocks_with_its_tempo() {
+    fn midi_clock_beats_every_24_clocks() {
         let mut c = MidiClock::new();
         assert_eq!(c.feed(0, 0xFA), Some(Cue::Start));
         // 120 BPM: a clock every 500_000 / 24 µs.
@@ -655,11 +546,16 @@ mod tests {
             }
         }
         assert_eq!(beats.len(), 3);
-        let Cue::Beat { t_us, bpm } = beats[2] else {
-            panic!("{beats:?}")
-        };
-        assert_eq!(t_us, 1_000_000);
-        assert!((bpm.unwrap() - 120.0).abs() < 0.01, "{bpm:?}");
+        // The beat at its clock's time; the tempo is the follower's to measure, and the
+        // decoder's own measure (for clock without Start) is 120.
+        assert_eq!(
+            beats[2],
+            Cue::Beat {
+                t_us: 1_000_000,
+                bpm: None
+            }
+        );
+        assert!((c.bpm().unwrap() - 120.0).abs() < 0.01, "{:?}", c.bpm());
         assert_eq!(c.feed(2_000_000, 0xFC), Some(Cue::Stop));
         // Song position 0x0102 sixteenths, a clock byte inside the message.
         assert_eq!(c.feed(2_000_000, 0xF2), None);
@@ -691,13 +587,23 @@ mod tests {
             cues.packet(5, &bundle).unwrap(),
             vec![Cue::Tempo(96.5), Cue::Beat { t_us: 5, bpm: None }]
         );
+        // A beat without a tempo: the follower measures it; with one: stated.
         assert_eq!(
             cues.packet(500_005, &beat).unwrap(),
             vec![Cue::Beat {
                 t_us: 500_005,
-                bpm: Some(120.0)
+                bpm: None
             }]
         );
+        assert_eq!(
+            cues.packet(900_000, &encode_osc("/orch/beat", &[OscArg::Float(150.0)]))
+                .unwrap(),
+            vec![Cue::Beat {
+                t_us: 900_000,
+                bpm: Some(150.0)
+            }]
+        );
+        assert_eq!(cues.beats(), 3);
         for bad in [&m[..10], b"orch\0\0\0\0", &bundle[..20], b"/x\0\0,q\0\0"] {
             assert!(parse_osc(bad).is_err(), "{bad:?}");
         }
@@ -707,59 +613,17 @@ mod tests {
     }
 
     #[test]
-    fn tap_tempo_averages_and_restarts() {
+    fn a_tap_is_a_beat_at_its_time() {
         let mut t = TapTempo::new();
         assert_eq!(t.tap(0), Cue::Beat { t_us: 0, bpm: None });
-        t.tap(600_000);
-        let Cue::Beat { bpm, .. } = t.tap(1_100_000) else {
-            unreachable!()
-        };
-        // Two intervals, 600 and 500 ms: 1.1 s for two beats.
-        assert!((bpm.unwrap() - 60e6 * 2.0 / 1.1e6).abs() < 1e-9);
         assert_eq!(
-            t.tap(5_000_000),
+            t.tap(600_000),
             Cue::Beat {
-                t_us: 5_000_000,
+                t_us: 600_000,
                 bpm: None
             }
         );
-    }
-
-    #[test]
-    fn phase_following_pulls_by_the_gain_within_the_limit() {
-        // A score at 120 BPM, played as written from wall 0.
-        let beats = ScoreBeats::from_times((0..100).map(|i| i * 500_000).collect());
-        let map = TimeMap::new(0, Tempo::NORMAL);
-        let mut imm = Follower::new(beats.clone(), Follow::Immediate);
-        let mut ph = Follower::new(beats, Follow::PHASE);
-        // The conductor's beat at 4.1 beats of the score: the performance is 0.1 beat ahead.
-        let cue = Cue::Beat {
-            t_us: 2_050_000,
-            bpm: Some(90.0),
-        };
-        assert_eq!(
-            imm.cue(&cue, Some(&map)),
-            Action::Tempo(Tempo::new(0.75).unwrap())
-        );
-        let Action::Tempo(t) = ph.cue(&cue, Some(&map)) else {
-            panic!()
-        };
-        assert!(
-            (t.get() - 0.75 * (1.0 - PHASE_GAIN * 0.1)).abs() < 1e-9,
-            "{t:?}"
-        );
-        // 0.45 beat behind: the pull is limited.
-        let cue = Cue::Beat {
-            t_us: 2_275_000, // 4.55 beats: 0.45 behind
-            bpm: Some(120.0),
-        };
-        let Action::Tempo(t) = ph.cue(&cue, Some(&map)) else {
-            panic!()
-        };
-        assert!((t.get() - (1.0 + PHASE_LIMIT)).abs() < 1e-9, "{t:?}");
-        assert_eq!(ph.cue(&Cue::Stop, Some(&map)), Action::Pause);
-        assert_eq!(ph.cue(&Cue::Start, Some(&map)), Action::Start);
-        assert_eq!(ph.cue(&Cue::Continue, Some(&map)), Action::Resume);
+        assert_eq!(t.taps(), 2);
     }
 
     #[test]
@@ -768,8 +632,12 @@ mod tests {
         let beats = ScoreBeats::from_times(vec![0, 500_000, 1_000_000, 2_000_000, 3_000_000]);
         let mut f = Follower::new(beats.clone(), Follow::PHASE);
         // 10 sixteenths: 2.5 quarters, half into the third (a 1 s quarter).
-        assert_eq!(f.cue(&Cue::SongPosition(10), None), Action::Jump(1_500_000));
-        assert_eq!(f.cue(&Cue::SongPosition(0), None), Action::Jump(0));
+        let at = |cue| Timed { t_us: 0, cue };
+        assert_eq!(
+            f.cue(&at(Cue::SongPosition(10)), None),
+            Action::Jump(1_500_000)
+        );
+        assert_eq!(f.cue(&at(Cue::SongPosition(0)), None), Action::Jump(0));
         // Past the end the last quarter's length goes on.
         assert_eq!(beats.time_of(6.0), 5_000_000);
         for q in [0.0, 0.25, 1.5, 2.75, 3.5] {

@@ -19,7 +19,9 @@
 //!   sounded. Every note gets exactly one outcome; they add up.
 //! - **A conductor** ([`conduct`]): tempo sources behind one trait ([`TempoSource`]: MIDI
 //!   clock, OSC, tap tempo, the baton tracker through the front end) and the [`Follower`]
-//!   that turns their beats into tempo changes, following the rate or also the phase.
+//!   ([`follow`]) that turns their beats into tempo changes, following the rate or also the
+//!   phase, by one rule for every source ([`meter`]: a sustained change taken at its second
+//!   beat, a single odd interval never).
 //! - **Real time** ([`realtime`]): the sender on its own thread at real-time priority where
 //!   the OS allows it, with a precise sleep, lateness measured per message sent.
 //!
@@ -56,8 +58,10 @@
 #![warn(missing_docs)]
 
 pub mod conduct;
+pub mod follow;
 pub mod ledger;
 pub mod link;
+pub mod meter;
 pub mod performer;
 pub mod plan;
 pub mod realtime;
@@ -66,11 +70,12 @@ pub mod robot;
 pub mod tempo;
 
 pub use conduct::{
-    Action, ConductError, Cue, Follow, Follower, MidiClock, OscCues, ScoreBeats, TapTempo,
-    TempoSource, Timed,
+    Action, ConductError, Cue, MidiClock, OscCues, ScoreBeats, TapTempo, TempoSource, Timed,
 };
+pub use follow::{Follow, Follower};
 pub use ledger::{Ledger, NoteRecord, Outcome, ON_TIME_US};
 pub use link::{DinWire, Link, MidiOut, MidiRecording, RunningStatus};
+pub use meter::{Heard, Meter};
 pub use performer::{
     perform, Control, Live, PerformError, Played, Setup, KEEP_ALIVE_US, VELOCITY_TOLERANCE,
 };

@@ -4,7 +4,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use orch_core::{Config, Stats};
-use orch_seq::Clock;
+use orch_seq::{Bell, Clock};
 use orch_sim::{Performance, SimConfig};
 
 use crate::ledger::{Ledger, NoteRecord, Outcome};
@@ -154,11 +154,14 @@ impl Setup {
 }
 
 /// Steering a performance from another thread: stop it, pause and resume it, change its
-/// tempo. A performance looks at its control at least every 40 ms (with a live view; see
-/// [`poll_every`](Self::poll_every)) and before each send, so a change takes effect within
-/// 40 ms of being asked.
+/// tempo, jump. Every request rings the control's [`Bell`]: a performance waiting for its
+/// next send (or paused) wakes at once and takes it, whatever its clock's wait (a clock that
+/// can be woken: `orch-seq`'s `RealClock`, [`PreciseClock`](crate::realtime::PreciseClock)),
+/// so a change takes effect as soon as it is asked, not at a poll. It also looks at its
+/// control before each send.
 #[derive(Debug, Default)]
 pub struct Control {
+    bell: Bell,
     stop: AtomicBool,
     pause: AtomicBool,
     poll_us: std::sync::atomic::AtomicU64,
@@ -177,11 +180,16 @@ impl Control {
     /// Stop as soon as possible: every key released, the rest of the song stopped.
     pub fn stop(&self) {
         self.stop.store(true, Ordering::SeqCst);
+        self.bell.ring();
     }
 
-    /// Look at the control (and call the live view) every `us` µs instead of every 40 ms, from
-    /// 1 ms to 40 ms: a conductor's change then takes effect within that. (Each wake is one
-    /// call of the live view.)
+    /// The bell every request rings (a performance waits on it).
+    pub fn bell(&self) -> &Bell {
+        &self.bell
+    }
+
+    /// Call the live view every `us` µs instead of every 40 ms, from 1 ms to 40 ms. (A request
+    /// does not wait for it: it wakes the performance at once.)
     pub fn poll_every(&self, us: u64) {
         self.poll_us
             .store(us.clamp(1_000, SHOW_EVERY_US), Ordering::SeqCst);
@@ -205,12 +213,14 @@ impl Control {
     /// already struck are not struck again; the rest play after the pause, each once.
     pub fn pause(&self) {
         self.pause.store(true, Ordering::SeqCst);
+        self.bell.ring();
     }
 
     /// Go on after a [`pause`](Self::pause), from the score time where it paused, at the
     /// tempo it had.
     pub fn resume(&self) {
         self.pause.store(false, Ordering::SeqCst);
+        self.bell.ring();
     }
 
     /// Whether a pause is asked.
@@ -221,6 +231,7 @@ impl Control {
     /// Play at `tempo` from now on.
     pub fn set_tempo(&self, tempo: Tempo) {
         self.tempo.ask(tempo);
+        self.bell.ring();
     }
 
     /// Jump to score time `score_us` (µs of the song at its written tempo): every key is
@@ -232,6 +243,7 @@ impl Control {
     /// taken replaces it.
     pub fn jump_to(&self, score_us: u64) {
         self.jump.ask((score_us, None));
+        self.bell.ring();
     }
 
     /// Play from the top (a conductor's Start), asked at wall time `asked_at_us` on the
@@ -460,8 +472,8 @@ enum Out<'m, M: MidiOut> {
 /// `midi` output the bytes go out there, and the virtual robot is its copy at the far end of
 /// `setup.link`; without, the virtual robot is the robot. `clock` paces the sends (a
 /// `VirtualClock` renders as fast as the machine goes); with `live`, the performer wakes at
-/// least every 40 ms (or as [`Control::poll_every`] says) to call it with where it stands
-/// and to look at `control`. With a `control`, `source` is cloned before it is read, so a
+/// least every 40 ms (or as [`Control::poll_every`] says) to call it with where it stands.
+/// A request to `control` wakes it at once (its [`Bell`]). With a `control`, `source` is cloned before it is read, so a
 /// jump ([`Control::jump_to`]) can read the score again from its start.
 ///
 /// After a jump the account goes on as one: notes a jump passes over (after a jump forward,
@@ -531,6 +543,9 @@ where
     // The numbers of the last tempo and jump asked of the control that this performance took.
     let (mut seen_tempo, mut seen_jump) = (0u64, 0u64);
     loop {
+        // The control's rings so far, read before looking at it: a request after this wakes
+        // the wait below.
+        let seen = control.map_or(0, |c| c.bell().rung());
         if let (Some(c), Some(origin)) = (control, origin.as_ref()) {
             let now = clock.now_us().max(last_at);
             // A start over asked before the performance got past where its pass began
@@ -610,12 +625,13 @@ where
             }
         }
         if let Some(l) = live.as_deref_mut() {
-            // Wake at least every 40 ms (or the control's poll) to show where the song is and to
-            // look at `control`;
-            // the last stretch before a send is one precise wait, with nothing else in it.
+            // Wake at least every 40 ms (or the control's poll) to show where the song is, and
+            // at once when the control rings (a request); the last stretch before a send is one
+            // precise wait, with nothing else in it.
             let mut stop = false;
             let mut replan = false;
             loop {
+                let seen = control.map_or(0, |c| c.bell().rung());
                 if control.is_some_and(Control::stopping) {
                     stop = true;
                     break;
@@ -628,9 +644,13 @@ where
                     last_byte = Some(at);
                     burst = 0;
                     let song_us = planner.time_map().score(at as i64);
-                    while c.paused() && !c.stopping() {
+                    loop {
+                        let seen = c.bell().rung();
+                        if !c.paused() || c.stopping() {
+                            break;
+                        }
                         let now = clock.now_us();
-                        clock.wait_until(now + every);
+                        clock.wait_until_rung(now + every, c.bell(), seen);
                         // The robot's own timers run on (a strike held for its shortest
                         // sounding press lets go now).
                         robot.advance(clock.now_us()).map_err(robot_err)?;
@@ -660,10 +680,14 @@ where
                 }
                 let now = clock.now_us();
                 if now + every >= due.0 {
-                    clock.wait_until(due.0);
+                    if wait(clock, control, due.0, seen) {
+                        continue;
+                    }
                     break;
                 }
-                clock.wait_until(now + every);
+                if wait(clock, control, now + every, seen) {
+                    continue;
+                }
                 l(&Live {
                     // In a jump's lead-in, the target.
                     song_us: planner
@@ -683,8 +707,8 @@ where
             if replan {
                 continue;
             }
-        } else {
-            clock.wait_until(due.0);
+        } else if wait(clock, control, due.0, seen) {
+            continue;
         }
         if poll {
             if let Out::Midi { out, .. } = &mut out {
@@ -840,6 +864,18 @@ where
             .map(|k| !setup.config.dynamics.touch(k as u8).is_full())
             .collect(),
     })
+}
+
+/// Waits for `until` on `clock`, or until `control` rings after `seen` rings: whether it
+/// rang.
+fn wait(clock: &mut dyn Clock, control: Option<&Control>, until: u64, seen: u64) -> bool {
+    match control {
+        Some(c) => clock.wait_until_rung(until, c.bell(), seen),
+        None => {
+            clock.wait_until(until);
+            false
+        }
+    }
 }
 
 /// Lets every key go at `t`, on every channel: All Notes Off and All Sound Off (the pedal's

@@ -7,7 +7,7 @@
 
 use std::time::{Duration, Instant};
 
-use orch_seq::{Clock, Lateness};
+use orch_seq::{Bell, Clock, Lateness};
 
 /// The host's monotonic clock, waiting with `spin_sleep`. It never wakes early.
 #[derive(Debug)]
@@ -34,6 +34,11 @@ impl PreciseClock {
     }
 }
 
+impl PreciseClock {
+    /// The last stretch of a wait that a [`Bell`] does not interrupt: spun out precisely.
+    pub const BELL_SLACK: Duration = Duration::from_micros(250);
+}
+
 impl Default for PreciseClock {
     fn default() -> Self {
         Self::new()
@@ -57,6 +62,25 @@ impl Clock for PreciseClock {
 
     fn lateness(&self) -> Lateness {
         Lateness::of(&self.samples)
+    }
+
+    /// Sleeps on the bell until [`PreciseClock::BELL_SLACK`] before the deadline (a
+    /// condition variable: a ring wakes it at once), then `spin_sleep`s the rest, which no
+    /// ring interrupts (at most that long).
+    fn wait_until_rung(&mut self, deadline_us: u64, bell: &Bell, seen: u64) -> bool {
+        let slack = Self::BELL_SLACK.as_micros() as u64;
+        loop {
+            if bell.rung() > seen {
+                return true;
+            }
+            let now = self.now_us();
+            if now + slack >= deadline_us {
+                break;
+            }
+            bell.wait(seen, Duration::from_micros(deadline_us - slack - now));
+        }
+        self.wait_until(deadline_us);
+        false
     }
 }
 
@@ -106,4 +130,27 @@ pub fn spawn<T: Send + 'static>(
             (raised, f())
         })
         .expect("a thread can be started")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_precise_wait_ends_at_a_ring_and_otherwise_at_its_deadline() {
+        let bell = std::sync::Arc::new(Bell::new());
+        let mut c = PreciseClock::new();
+        let seen = bell.rung();
+        let b = std::sync::Arc::clone(&bell);
+        let ringer = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(20));
+            b.ring();
+        });
+        assert!(c.wait_until_rung(5_000_000, &bell, seen));
+        assert!(c.now_us() < 2_000_000, "{}", c.now_us());
+        ringer.join().unwrap();
+        let now = c.now_us();
+        assert!(!c.wait_until_rung(now + 10_000, &bell, bell.rung()));
+        assert!(c.now_us() >= now + 10_000);
+    }
 }

@@ -5,6 +5,8 @@
 //! figures ([`Clock::lateness`]).
 
 use std::thread;
+
+use crate::Bell;
 use std::time::{Duration, Instant};
 
 /// Something that tells the time and waits for a deadline.
@@ -18,6 +20,19 @@ pub trait Clock {
 
     /// Statistics of the lateness of every wait so far.
     fn lateness(&self) -> Lateness;
+
+    /// Waits as [`wait_until`](Self::wait_until) does, but returns as soon as `bell` has
+    /// rung more than `seen` times (read [`Bell::rung`] before looking at what the bell
+    /// announces): `true` if it was the bell (then the deadline may not have come). The
+    /// default, for a clock no other thread can reach (a virtual one), looks at the bell
+    /// once and otherwise waits for the deadline.
+    fn wait_until_rung(&mut self, deadline_us: u64, bell: &Bell, seen: u64) -> bool {
+        if bell.rung() > seen {
+            return true;
+        }
+        self.wait_until(deadline_us);
+        false
+    }
 }
 
 /// How late a clock's wake-ups were, in µs.
@@ -151,11 +166,60 @@ impl Clock for RealClock {
     fn lateness(&self) -> Lateness {
         Lateness::of(&self.samples)
     }
+
+    /// Sleeps on the bell until [`SPIN`](Self::SPIN) before the deadline, then yields in a
+    /// loop, looking at the bell, until the deadline.
+    fn wait_until_rung(&mut self, deadline_us: u64, bell: &Bell, seen: u64) -> bool {
+        let deadline = self.start + Duration::from_micros(deadline_us);
+        loop {
+            if bell.rung() > seen {
+                return true;
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                break;
+            }
+            let left = deadline - now;
+            if left > Self::SPIN {
+                bell.wait(seen, left - Self::SPIN);
+            } else {
+                thread::yield_now();
+            }
+        }
+        let late = self.now_us().saturating_sub(deadline_us);
+        self.samples.push(late);
+        false
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_real_clock_wait_ends_at_a_ring_and_otherwise_at_its_deadline() {
+        let bell = std::sync::Arc::new(Bell::new());
+        let mut c = RealClock::new();
+        let seen = bell.rung();
+        let b = std::sync::Arc::clone(&bell);
+        let ringer = thread::spawn(move || {
+            thread::sleep(Duration::from_millis(20));
+            b.ring();
+        });
+        // A deadline 5 s off: the ring ends the wait long before.
+        assert!(c.wait_until_rung(5_000_000, &bell, seen));
+        assert!(c.now_us() < 2_000_000, "{}", c.now_us());
+        ringer.join().unwrap();
+        // No ring: the deadline, never early.
+        let now = c.now_us();
+        assert!(!c.wait_until_rung(now + 10_000, &bell, bell.rung()));
+        assert!(c.now_us() >= now + 10_000);
+        // The default (a virtual clock): a ring already there ends it, else the deadline.
+        let mut v = VirtualClock::new();
+        assert!(v.wait_until_rung(1_000, &bell, seen));
+        assert!(!v.wait_until_rung(1_000, &bell, bell.rung()));
+        assert_eq!(v.now_us(), 1_000);
+    }
 
     #[test]
     fn virtual_clock_jumps_to_deadlines_and_reports_past_ones() {

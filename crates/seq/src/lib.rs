@@ -8,7 +8,8 @@
 //!   [`SeqError`], never a panic. Built on [`midly`].
 //! - [`wire`]: timed messages as the bytes a sequencer sends, optionally with running status.
 //! - [`Clock`]: [`VirtualClock`] (as fast as possible, deterministic) and [`RealClock`]
-//!   (sleeps, then spins to the deadline; keeps [`Lateness`] statistics).
+//!   (sleeps, then spins to the deadline; keeps [`Lateness`] statistics); a wait that a
+//!   [`Bell`] ends early ([`Clock::wait_until_rung`]).
 //!
 //! ```
 //! use orch_seq::{wire, RunningStatus, Song};
@@ -34,12 +35,14 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod bell;
 mod clock;
 mod error;
 mod smf;
 mod song;
 mod stream;
 
+pub use bell::Bell;
 pub use clock::{Clock, Lateness, RealClock, VirtualClock};
 pub use error::SeqError;
 pub use midly;

@@ -2,6 +2,8 @@
 //! and a render on the virtual clock.
 #![allow(dead_code)]
 
+pub mod conducted;
+
 use std::path::PathBuf;
 
 use std::sync::Arc;

@@ -1,0 +1,363 @@
+//! The follower: a conductor's cues in, tempo changes of the performance out.
+//!
+//! Every source's beats go through the same rule ([`Meter`]): only beat times count (the
+//! ictus, the time the source gives for the beat, not the time it was recognised, which may
+//! be two video frames later), and the tempo is measured from them here, not by the source.
+//! A tempo the conductor states (`/orch/tempo`, `/orch/beat BPM`) is taken at its word.
+//!
+//! - **The rate** is the period the meter expects next: an in-time beat updates it (the
+//!   trend of the last intervals), a sustained change makes it jump at the change's second
+//!   beat, a single odd interval (an invented, missed or late beat, a fermata) leaves it.
+//! - **The phase** (phase-following only): each beat taken is matched to a quarter note of
+//!   the score by counting (the first beat, and a restart, to the nearest quarter; then one
+//!   quarter a beat, two or three over missed beats), so a performance that a change has
+//!   left more than half a beat behind or ahead is not matched to the wrong quarter. The
+//!   error `e` (beats, positive: the performance is ahead) is made up over the next beat: the
+//!   factor is set so that at the next expected beat the performance stands `e − pull`
+//!   from its quarter, with `pull = gain × e` limited to ±`limit`. The factor is computed from
+//!   the moment the cue arrived to the next expected beat, so a beat recognised late (the
+//!   baton's) is made up all the same.
+//!
+//! How fast the phase is pulled: a one-beat error (noise, a single late beat) is halved each
+//! beat, at most [`PHASE_LIMIT`] (0.15) of a beat a beat. A **consistent** error (the same
+//! sign as the last beat's, or the error a confirmed change of tempo left) is made up whole
+//! over the next beat as far as [`PHASE_CATCH_UP`] allows: the performance's beat may then
+//! last from 0.76 to 1.24 of the conductor's, so no beat of it is longer or shorter than the
+//! conductor's by as much as a sixteenth note (0.25 beat). That makes up to 0.32 of a beat
+//! when behind and 0.19 when ahead in one beat (0.15 before): the error an abrupt change of
+//! 30 % leaves while it is confirmed (about 0.35 beat behind, 0.5 ahead) is gone in two and
+//! three beats.
+//!
+//! A beat held back as odd and late (more than a period late, less than two: a slowing down
+//! not yet confirmed) finds the performance ahead of it: the performance waits for the
+//! conductor, as far as one beat may stretch (1.24 of the conductor's). An early odd beat (an
+//! invented beat, or a speeding up not yet confirmed) and a very late one (a fermata) move
+//! nothing; the beat after a fermata is a restart, its error a one-beat error.
+
+use crate::conduct::{Action, Cue, ScoreBeats, Timed};
+use crate::meter::{Heard, Meter};
+use crate::tempo::{Tempo, TimeMap};
+
+/// The phase-following gain for a one-beat error: the share of it made up over the next beat.
+pub const PHASE_GAIN: f64 = 0.5;
+
+/// The most a one-beat error pulls in one beat, in beats (the factor moved by at most ±15 %).
+pub const PHASE_LIMIT: f64 = 0.15;
+
+/// How much a consistent error (the same sign two beats running, or left by a confirmed
+/// change of tempo) may change one beat: it is made up whole, as long as the performance's
+/// next beat lasts between 1 − 0.24 and 1 + 0.24 of the conductor's, just under a sixteenth
+/// note (0.25) either way. In beats of the score made up in one beat, that is at most 0.32
+/// (catching up) and 0.19 (waiting).
+pub const PHASE_CATCH_UP: f64 = 0.24;
+
+/// The tempo factors the follower gives: a twentieth to twenty times as written (as
+/// `orch play --tempo` takes).
+pub const FACTOR_RANGE: (f64, f64) = (0.05, 20.0);
+
+/// How the follower follows. See the [module notes](self).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Follow {
+    /// The rate only.
+    Immediate,
+    /// The rate, and each beat pulls the phase.
+    Phase {
+        /// The share of a one-beat error made up over the next beat.
+        gain: f64,
+        /// The most one beat may pull a one-beat error, in beats.
+        limit: f64,
+        /// How much longer or shorter than the conductor's (a fraction) one beat of the
+        /// performance may be while a consistent error is made up whole.
+        catch_up: f64,
+    },
+}
+
+impl Follow {
+    /// Phase-following with [`PHASE_GAIN`], [`PHASE_LIMIT`] and [`PHASE_CATCH_UP`].
+    pub const PHASE: Follow = Follow::Phase {
+        gain: PHASE_GAIN,
+        limit: PHASE_LIMIT,
+        catch_up: PHASE_CATCH_UP,
+    };
+}
+
+/// Turns cues into tempo factors. See the [module notes](self).
+#[derive(Clone, Debug)]
+pub struct Follower {
+    beats: ScoreBeats,
+    follow: Follow,
+    meter: Meter,
+    /// The quarter of the score the last beat taken was matched to.
+    quarter: Option<f64>,
+    /// The phase error at the last beat taken, beats.
+    last_error: Option<f64>,
+}
+
+impl Follower {
+    /// A follower of a score whose quarter notes are `beats`.
+    pub fn new(beats: ScoreBeats, follow: Follow) -> Self {
+        Self {
+            beats,
+            follow,
+            meter: Meter::new(),
+            quarter: None,
+            last_error: None,
+        }
+    }
+
+    /// The conductor's tempo, as last heard or measured (quarter notes a minute).
+    pub fn bpm(&self) -> Option<f64> {
+        self.meter.period().map(|p| 60e6 / p)
+    }
+
+    /// What to do about `timed` (a cue and when it arrived), the performance's time map being
+    /// `map` (`None` before it starts: then only a tempo can be taken).
+    pub fn cue(&mut self, timed: &Timed, map: Option<&TimeMap>) -> Action {
+        let now = timed.t_us;
+        let (t, stated) = match timed.cue {
+            Cue::Tempo(bpm) => (None, Some(bpm)),
+            Cue::Beat { t_us, bpm } => (Some(t_us), bpm),
+            Cue::Stop => {
+                self.forget();
+                return Action::Pause;
+            }
+            Cue::Start => {
+                self.forget();
+                return Action::Start;
+            }
+            Cue::Continue => {
+                self.forget();
+                return Action::Resume;
+            }
+            // MIDI beats are sixteenth notes: four to the quarter.
+            Cue::SongPosition(p) => {
+                self.forget();
+                return Action::Jump(self.beats.time_of(f64::from(p) / 4.0));
+            }
+        };
+        if let Some(bpm) = stated.filter(|b| b.is_finite() && *b > 0.0) {
+            // Taken at its word: the period, and a beat that starts the count again.
+            self.meter.state(60e6 / bpm);
+            self.meter.restart();
+        }
+        let heard = t.map(|t| self.meter.beat(t));
+        let Some(period) = self.meter.period() else {
+            // The first beat: the phase is noted, no rate yet.
+            if let (Some(t), Some(m)) = (t, map) {
+                self.quarter = Some(self.beats.at(m.score(t as i64)).0.round());
+            }
+            return Action::Nothing;
+        };
+        let rate_at = |s: u64| self.beats.at(s).1 / period;
+        let Some(m) = map else {
+            return factor(rate_at(0));
+        };
+        let (Some(t), Some(heard)) = (t, heard) else {
+            return factor(rate_at(m.score(now as i64)));
+        };
+        let pos = self.beats.at(m.score(t as i64)).0;
+        // The quarter this beat is, and whether its error is consistent.
+        let (quarter, consistent) = match heard {
+            Heard::Restart => {
+                self.last_error = None;
+                (pos.round(), false)
+            }
+            Heard::InTime { beats } => match self.quarter {
+                Some(q) => (q + f64::from(beats), false),
+                None => (pos.round(), false),
+            },
+            Heard::Changed => match self.quarter {
+                Some(q) => (q + 2.0, true),
+                None => (pos.round(), false),
+            },
+            Heard::Odd { late } => {
+                // Not taken: the rate stands; a late one pulls a performance that is ahead.
+                let q = self.quarter.map_or(pos.round(), |q| q + 1.0);
+                let e = pos - q;
+                return match self.follow {
+                    // The conductor's beat is late and the performance ahead of it: wait for
+                    // it, as far as one beat may stretch.
+                    Follow::Phase { catch_up, .. } if late && e > 0.0 && pos > 0.0 => {
+                        let wait = e.min(1.0 - 1.0 / (1.0 + catch_up));
+                        self.pulled(m, t, now, period, pos, wait)
+                    }
+                    _ => Action::Nothing,
+                };
+            }
+        };
+        self.quarter = Some(quarter);
+        let e = pos - quarter;
+        let consistent = consistent
+            || self
+                .last_error
+                .is_some_and(|l| l.signum() == e.signum() && l.abs() > 0.01);
+        self.last_error = Some(e);
+        match self.follow {
+            // Before the first beat of the score the conductor is giving an upbeat: no pull.
+            Follow::Phase {
+                gain,
+                limit,
+                catch_up,
+            } if pos > 0.0 => {
+                let pull = if consistent {
+                    // The performance's next beat lasts (1 − pull)⁻¹ of the conductor's:
+                    // kept within 1 ± catch_up of it.
+                    e.clamp(1.0 - 1.0 / (1.0 - catch_up), 1.0 - 1.0 / (1.0 + catch_up))
+                } else {
+                    (gain * e).clamp(-limit, limit)
+                };
+                self.pulled(m, t, now, period, pos, pull)
+            }
+            _ => factor(rate_at(m.score(now as i64))),
+        }
+    }
+
+    /// The factor that, from `now`, brings the performance to `pos + 1 − pull` quarters at
+    /// the next expected beat (`t + period`): the error at `t` less `pull` remains there.
+    fn pulled(&self, m: &TimeMap, t: u64, now: u64, period: f64, pos: f64, pull: f64) -> Action {
+        let next = t as f64 + period;
+        let left = next - now as f64;
+        let target = self.beats.time_of(pos + 1.0 - pull) as f64;
+        let here = m.score(now as i64) as f64;
+        if left < period / 2.0 || target <= here {
+            // Recognised too late to steer to the next beat: the pull on the rate alone.
+            let len = self.beats.at(here as u64).1;
+            return factor(len / period * (1.0 - pull));
+        }
+        factor((target - here) / left)
+    }
+
+    /// The beats so far are forgotten (the transport moved): the next beat starts again.
+    fn forget(&mut self) {
+        self.meter.restart();
+        self.quarter = None;
+        self.last_error = None;
+    }
+}
+
+fn factor(f: f64) -> Action {
+    Tempo::new(f.clamp(FACTOR_RANGE.0, FACTOR_RANGE.1)).map_or(Action::Nothing, Action::Tempo)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at(t_us: u64, cue: Cue) -> Timed {
+        Timed { t_us, cue }
+    }
+
+    #[test]
+    fn phase_following_pulls_by_the_gain_within_the_limit() {
+        // A score at 120 BPM, played as written from wall 0.
+        let beats = ScoreBeats::from_times((0..100).map(|i| i * 500_000).collect());
+        let map = TimeMap::new(0, Tempo::NORMAL);
+        let mut imm = Follower::new(beats.clone(), Follow::Immediate);
+        let mut ph = Follower::new(beats, Follow::PHASE);
+        // The conductor's beat at 4.1 beats of the score, stating 90 BPM: the performance is
+        // 0.1 beat ahead.
+        let cue = at(
+            2_050_000,
+            Cue::Beat {
+                t_us: 2_050_000,
+                bpm: Some(90.0),
+            },
+        );
+        assert_eq!(
+            imm.cue(&cue, Some(&map)),
+            Action::Tempo(Tempo::new(0.75).unwrap())
+        );
+        let Action::Tempo(t) = ph.cue(&cue, Some(&map)) else {
+            panic!()
+        };
+        assert!(
+            (t.get() - 0.75 * (1.0 - PHASE_GAIN * 0.1)).abs() < 1e-9,
+            "{t:?}"
+        );
+        // 0.45 beat behind, at a stated 120: a first error's pull is limited.
+        let cue = at(
+            2_275_000,
+            Cue::Beat {
+                t_us: 2_275_000,
+                bpm: Some(120.0),
+            },
+        );
+        let Action::Tempo(t) = ph.cue(&cue, Some(&map)) else {
+            panic!()
+        };
+        assert!((t.get() - (1.0 + PHASE_LIMIT)).abs() < 1e-9, "{t:?}");
+        assert_eq!(ph.cue(&at(0, Cue::Stop), Some(&map)), Action::Pause);
+        assert_eq!(ph.cue(&at(0, Cue::Start), Some(&map)), Action::Start);
+        assert_eq!(ph.cue(&at(0, Cue::Continue), Some(&map)), Action::Resume);
+    }
+
+    #[test]
+    fn a_consistent_error_is_made_up_whole_up_to_the_catch_up_limit() {
+        // Beats every 500 ms, the performance steady at the written 120 BPM but started
+        // 60 ms late: 0.12 beat behind at every beat.
+        let beats = ScoreBeats::from_times((0..100).map(|i| i * 500_000).collect());
+        let map = TimeMap::new(60_000, Tempo::NORMAL);
+        let mut f = Follower::new(beats, Follow::PHASE);
+        let beat = |t| at(t, Cue::Beat { t_us: t, bpm: None });
+        assert_eq!(f.cue(&beat(1_000_000), Some(&map)), Action::Nothing);
+        // The first error: half of it.
+        let Action::Tempo(t) = f.cue(&beat(1_500_000), Some(&map)) else {
+            panic!()
+        };
+        assert!((t.get() - 1.06).abs() < 1e-6, "{t:?}");
+        // The same error again: consistent, all of it.
+        let Action::Tempo(t) = f.cue(&beat(2_000_000), Some(&map)) else {
+            panic!()
+        };
+        assert!((t.get() - 1.12).abs() < 1e-6, "{t:?}");
+        // A larger consistent error: the next beat of the performance 0.76 of the
+        // conductor's, no shorter.
+        let map = TimeMap::new(200_000, Tempo::NORMAL);
+        let Action::Tempo(t) = f.cue(&beat(2_500_000), Some(&map)) else {
+            panic!()
+        };
+        assert!(
+            (1.0 / t.get() - (1.0 - PHASE_CATCH_UP)).abs() < 1e-6,
+            "{t:?}"
+        );
+        // Ahead by as much, consistently: 1.24 of the conductor's beat, no longer.
+        let map = TimeMap::new(-400_000, Tempo::NORMAL);
+        f.cue(&beat(3_000_000), Some(&map));
+        let Action::Tempo(t) = f.cue(&beat(3_500_000), Some(&map)) else {
+            panic!()
+        };
+        assert!(
+            (1.0 / t.get() - (1.0 + PHASE_CATCH_UP)).abs() < 1e-6,
+            "{t:?}"
+        );
+    }
+
+    #[test]
+    fn a_beat_recognised_late_is_steered_to_from_when_it_arrived() {
+        // 120 BPM beats, each 0.1 beat behind the performance (it plays as written from 0);
+        // the fourth told 100 ms after its ictus. The error is consistent, made up whole: at
+        // the next beat (2.55 s) the performance is at quarter 5, the 100 ms of delay counted.
+        let beats = ScoreBeats::from_times((0..100).map(|i| i * 500_000).collect());
+        let map = TimeMap::new(0, Tempo::NORMAL);
+        let mut f = Follower::new(beats.clone(), Follow::PHASE);
+        for t in [550_000u64, 1_050_000, 1_550_000] {
+            f.cue(&at(t, Cue::Beat { t_us: t, bpm: None }), Some(&map));
+        }
+        let Action::Tempo(t) = f.cue(
+            &at(
+                2_150_000,
+                Cue::Beat {
+                    t_us: 2_050_000,
+                    bpm: None,
+                },
+            ),
+            Some(&map),
+        ) else {
+            panic!()
+        };
+        let mut m = map;
+        m.change(2_150_000, t);
+        let q = beats.at(m.score(2_550_000)).0;
+        assert!((q - 5.0).abs() < 1e-3, "{q} {t:?}");
+    }
+}
