@@ -231,10 +231,14 @@ async fn interpret(boards: &mut Boards, watchdog: &mut Watchdog, mut led: Led<'_
         if failed != 0 {
             wake = wake.min(retry_at);
         }
+        // Whether the boards may have changed: not for a byte that only began a message or
+        // continued one (orch-core's `feed` says so), so the loop does not look for changes
+        // after every byte (a PWM robot's `flush_duties` computes every key's duty).
+        let mut changed = true;
         match select(INPUT.receive(), Timer::at(wake)).await {
             Either::First(Input::Din(byte, at)) => {
                 advance(robot, boards, &mut failed, at).await;
-                robot.feed(byte, Instant::from_micros(at));
+                changed = robot.feed(byte, Instant::from_micros(at));
                 led.activity(at);
             }
             Either::First(Input::Usb(bytes, len, at)) => {
@@ -248,7 +252,9 @@ async fn interpret(boards: &mut Boards, watchdog: &mut Watchdog, mut led: Led<'_
             }
             Either::Second(()) => advance(robot, boards, &mut failed, now_us()).await,
         }
-        write(robot, boards, &mut failed).await;
+        if changed {
+            write(robot, boards, &mut failed).await;
+        }
         if failed != 0 && Clock::now() >= retry_at {
             // Boards set aside are initialised again, and sent their frame, once the bus is
             // usable (a hung transfer ended, SDA cleared).
