@@ -270,7 +270,7 @@ test('a board holding SCL low: OE goes high while every board is set aside, low 
   assert.equal(p.bus.outputs()[0][0], HOLD);
   assert.equal(p.bus.outputs()[2][8], HOLD);
   assert.equal(p.resets.length, 0);
-  console.log(`  a board held SCL low 700 ms: OE high ${fmt((high.ns - sent) / 1000)} µs after the write that hung, low ${fmt(backMs)} ms after it let go`);
+  console.log(`  a board held SCL low 700 ms: OE high ${fmt((high.ns - sent) / 1000)} µs after the Note-On whose write hung, low ${fmt(backMs)} ms after it let go`);
 });
 
 test('figures of the pca9685 build', () => {
