@@ -244,6 +244,33 @@ test('a panic drives OE high at once and turns every channel off, then the watch
   console.log(`  a panic: OE high ${fmt((oe.ns - at) / 1000)} µs after it, every board all off ${fmt(ms * 1000)} µs after it`);
 });
 
+test('a NACKing board is set aside while the others play (OE stays low), and initialised again with its duties when it answers', () => {
+  const { p } = booted();
+  p.sendDin([0x90, 60, 100, 0x90, 61, 100]); // board 1, channels 8 and 9
+  p.runUs(60_000);
+  assert.deepEqual(p.bus.outputs()[1].slice(8, 10), [HOLD, HOLD]);
+  p.bus.boards[1].nack = true;
+  p.sendDin([0x80, 61, 0]); // board 1's write fails
+  p.runUs(5_000);
+  const nacked = p.bus.nacked;
+  assert.ok(nacked >= 3, `the firmware retried (${nacked} NACKed address phases)`);
+  p.sendDin([0x90, 36, 100]); // board 0 still plays
+  p.runUs(5_000);
+  assert.equal(p.bus.outputs()[0][0], strikeDuty(100));
+  assert.ok(lastOe(p).enabled, 'OE low: the other boards are in service');
+  assert.ok(p.bus.nacked > nacked, 'it keeps trying board 1');
+  // Board 1 comes back after losing power: asleep, every channel off.
+  const fromLog = p.bus.log.length;
+  p.bus.boards[1].powerCycle();
+  p.bus.boards[1].nack = false;
+  p.runUs(30_000);
+  const seq = p.bus.log.slice(fromLog).filter((t) => t.board === 1).map((t) => t.bytes);
+  assert.deepEqual(seq.slice(0, 5), INIT, 'initialised again, every channel off first');
+  assert.deepEqual(seq.slice(5), [[0x26, 0x00, 0x08, 0x99, 0x0d]], 'then its duties: key 60 still holding');
+  assert.deepEqual(p.bus.outputs()[1].slice(8, 10), [HOLD, 0]);
+  assert.equal(p.resets.length, 0);
+});
+
 test('a board holding SCL low: OE goes high while every board is set aside, low again once they are initialised', () => {
   const { p } = booted();
   p.sendDin([0x90, 36, 100]); // board 0 channel 0
