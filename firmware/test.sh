@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Builds the ATmega16 firmware and runs its hardware-in-the-loop tests in simavr, and builds
-# the Raspberry Pi Pico firmware (firmware/rp2040) for thumbv6m-none-eabi and runs its tests in
-# the rp2040js emulator (firmware/rp2040-emu: node's test runner, orch-core on the host through
-# firmware/rp2040-emu/expect), booted from the UF2 that elf2uf2-rs makes of it (what a Pico is
-# flashed with).
+# the Raspberry Pi Pico firmware (firmware/rp2040) for thumbv6m-none-eabi, both variants (the
+# default on PCA9555 boards, and `--features pca9685` on PCA9685 PWM boards, kept beside it as
+# orch-rp2040-pca9685), and runs their tests in the rp2040js emulator (firmware/rp2040-emu:
+# node's test runner, orch-core on the host through firmware/rp2040-emu/expect), each booted
+# from the UF2 that elf2uf2-rs makes of it (what a Pico is flashed with).
 #
 # From a fresh machine: installs what is missing (Debian packages, the nightly's rust-src),
 # builds the firmware ELF at
@@ -28,15 +29,22 @@ elf="$here/atmega16/target/avr-none/release/orch-atmega16.elf"
 echo "== $elf"
 avr-size --format=avr --mcu=atmega16 "$elf" | grep -E 'Program|Data'
 
-echo "== building the Raspberry Pi Pico firmware (stable, thumbv6m-none-eabi)"
+echo "== building the Raspberry Pi Pico firmware (stable, thumbv6m-none-eabi), PCA9685 then PCA9555"
 if ! rustup target list --toolchain stable --installed | grep -q '^thumbv6m-none-eabi$'; then
     rustup target add thumbv6m-none-eabi --toolchain stable
 fi
-(cd "$here/rp2040" && cargo fmt --check && cargo build --release --locked)
+# Both in one target folder (they share every dependency but orch-core's features): the
+# pca9685 build is copied aside, the default one built last stays at the README's path.
 pico="$here/rp2040/target/thumbv6m-none-eabi/release/orch-rp2040"
-echo "== $pico"
+pico_pwm="$pico-pca9685"
+(cd "$here/rp2040" && cargo fmt --check &&
+    cargo build --release --locked --features pca9685 && cp "$pico" "$pico_pwm" &&
+    cargo build --release --locked)
 size_tool="$(command -v llvm-size || command -v arm-none-eabi-size || true)"
-[ -z "$size_tool" ] || "$size_tool" "$pico"
+for elf_file in "$pico" "$pico_pwm"; do
+    echo "== $elf_file"
+    [ -z "$size_tool" ] || "$size_tool" "$elf_file"
+done
 
 echo "== the Pico's UF2, what a Pico is flashed with (elf2uf2-rs, as the README says)"
 # Without its default `serial` feature (a serial monitor after deploying, which needs libudev).
@@ -48,11 +56,14 @@ if [ -z "$e2u" ]; then
     e2u="$cargo_bin/elf2uf2-rs"
 fi
 "$e2u" "$pico" "$pico.uf2"
-ls -l "$pico.uf2"
+"$e2u" "$pico_pwm" "$pico_pwm.uf2"
+ls -l "$pico.uf2" "$pico_pwm.uf2"
 
 echo "== the Pico firmware in an RP2040 emulator (rp2040js, firmware/rp2040-emu), booted from the UF2"
 (cd "$here/rp2040-emu/expect" && cargo build --release --locked)
-(cd "$here/rp2040-emu" && ORCH_RP2040_ELF="$pico" ORCH_RP2040_UF2="$pico.uf2" timeout 600 node --test test/*.test.js)
+(cd "$here/rp2040-emu" && ORCH_RP2040_ELF="$pico" ORCH_RP2040_UF2="$pico.uf2" \
+    ORCH_RP2040_PCA9685_ELF="$pico_pwm" ORCH_RP2040_PCA9685_UF2="$pico_pwm.uf2" \
+    timeout 600 node --test test/*.test.js)
 
 echo "== the orch command, for the thesis's whole chain (tests/chain.rs: orch play -> pty -> simavr)"
 (cd "$here/.." && cargo build --locked -p orch)

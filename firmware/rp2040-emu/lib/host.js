@@ -21,6 +21,35 @@ function runExpect(args, input = '') {
  * { writes: [{ tUs, board, outputs }], outputs: [4] }.
  */
 function hostRun(pico, untilNs = pico.nowNs, fromNs = 0) {
+  const text = hostInput(pico, untilNs, fromNs);
+  const writes = [];
+  let outputs = null;
+  for (const line of runExpect([], text).split('\n')) {
+    const w = line.split(' ');
+    if (w[0] === 'write') writes.push({ tUs: +w[1], board: +w[2], outputs: +w[3] });
+    if (w[0] === 'outputs') outputs = w.slice(1).map(Number);
+  }
+  return { writes, outputs };
+}
+
+/**
+ * The same for the `pca9685` build (`orch-rp2040-expect pca9685`: the firmware's robot.rs
+ * settings, flush_duties): { writes: [{ tUs, board, duties[16] }], duties: 4 × 16 at the end }.
+ */
+function hostRunPwm(pico, untilNs = pico.nowNs, fromNs = 0) {
+  const text = hostInput(pico, untilNs, fromNs);
+  const writes = [];
+  const duties = [];
+  for (const line of runExpect(['pca9685'], text).split('\n')) {
+    const w = line.split(' ');
+    if (w[0] === 'duties') writes.push({ tUs: +w[1], board: +w[2], duties: w.slice(3).map(Number) });
+    if (w[0] === 'final') duties[+w[1]] = w.slice(2).map(Number);
+  }
+  return { writes, duties };
+}
+
+/** What `pico` was fed, as `orch-rp2040-expect`'s input lines. */
+function hostInput(pico, untilNs, fromNs) {
   const inputs = [];
   for (const d of pico.dinIn) if (d.ns >= fromNs) inputs.push({ ns: d.ns, line: `din ${us(d.ns)} ${d.byte}` });
   for (const p of pico.usbIn) {
@@ -31,15 +60,7 @@ function hostRun(pico, untilNs = pico.nowNs, fromNs = 0) {
     }
   }
   inputs.sort((a, b) => a.ns - b.ns); // stable: a packet's events stay in order
-  const text = inputs.map((i) => i.line).join('\n') + `\nend ${us(untilNs)}\n`;
-  const writes = [];
-  let outputs = null;
-  for (const line of runExpect([], text).split('\n')) {
-    const w = line.split(' ');
-    if (w[0] === 'write') writes.push({ tUs: +w[1], board: +w[2], outputs: +w[3] });
-    if (w[0] === 'outputs') outputs = w.slice(1).map(Number);
-  }
-  return { writes, outputs };
+  return inputs.map((i) => i.line).join('\n') + `\nend ${us(untilNs)}\n`;
 }
 
 /** How many MIDI bytes a USB-MIDI event carries, by its code index number (as the firmware). */
@@ -130,8 +151,93 @@ function sameKeyEvents(firmware, host, maxLateUs) {
   return m;
 }
 
+/** The bus's duty writes (STOP times in µs, the board's 16 duties after each) from `from` on. */
+function firmwareDutyWrites(pico, from = 0) {
+  return pico.bus.dutyWrites(from).map((w) => ({ tUs: w.tNs / 1000, board: w.board, duties: w.duties }));
+}
+
+/**
+ * A series of duty writes without those that change nothing on their board (every board
+ * starts all off): the driver writes only the channels whose duty changed, so a flush that
+ * hands a board its duties unchanged puts nothing on the bus. Returns { writes, dropped }.
+ */
+function changingDutyWrites(writes) {
+  const last = [0, 1, 2, 3].map(() => new Array(16).fill(0));
+  const out = [];
+  for (const w of writes) {
+    if (w.duties.every((d, c) => d === last[w.board][c])) continue;
+    last[w.board] = w.duties;
+    out.push(w);
+  }
+  return { writes: out, dropped: writes.length - out.length };
+}
+
+/** Each channel's duty changes in a series of duty writes: [{ tUs, board, channel, duty }]. */
+function dutyEvents(writes) {
+  const last = [0, 1, 2, 3].map(() => new Array(16).fill(0));
+  const out = [];
+  for (const w of writes) {
+    w.duties.forEach((d, c) => {
+      if (d !== last[w.board][c]) out.push({ tUs: w.tUs, board: w.board, channel: c, duty: d });
+    });
+    last[w.board] = w.duties;
+  }
+  return out;
+}
+
+/**
+ * Every duty change the host made (strike, hold, release) reaches its channel, channel by
+ * channel in the same order with the same duty, none missing and none extra, no earlier than
+ * the host made it and at most `maxLateUs` after. Returns { changes (to a duty above 0), releases (to 0), late (sorted µs) }.
+ */
+function sameDutyEvents(firmware, host, maxLateUs) {
+  const f = dutyEvents(firmware);
+  const h = dutyEvents(host);
+  const m = { changes: 0, releases: 0, late: [] };
+  for (let board = 0; board < 4; board++) {
+    for (let channel = 0; channel < 16; channel++) {
+      const fc = f.filter((e) => e.board === board && e.channel === channel);
+      const hc = h.filter((e) => e.board === board && e.channel === channel);
+      const where = `board ${board} channel ${channel}`;
+      hc.forEach((he, i) => {
+        const fe = fc[i];
+        if (!fe) throw new Error(`${where}: the host's change #${i} to ${he.duty} at ${he.tUs} µs never reached the board (${fc.length} changes on the bus, ${hc.length} on the host)`);
+        if (fe.duty !== he.duty) throw new Error(`${where}: change #${i} is to ${fe.duty} on the bus at ${fe.tUs} µs, the host's to ${he.duty} at ${he.tUs} µs`);
+        const late = fe.tUs - he.tUs;
+        if (late < 0 || late > maxLateUs) {
+          throw new Error(`${where}: change #${i} to ${he.duty} on the bus at ${fe.tUs} µs, the host made it at ${he.tUs} µs (allowed: 0..${maxLateUs} µs later)`);
+        }
+        m.late.push(late);
+        if (he.duty === 0) m.releases++;
+        else m.changes++;
+      });
+      if (fc.length > hc.length) {
+        const e = fc[hc.length];
+        throw new Error(`${where}: the bus has a change to ${e.duty} at ${e.tUs} µs that the host never made`);
+      }
+    }
+  }
+  m.late.sort((a, b) => a - b);
+  return m;
+}
+
 function percentile(sorted, p) {
   return sorted.length ? sorted[Math.floor(((sorted.length - 1) * p) / 100)] : 0;
 }
 
-module.exports = { hostRun, smfToWire, firmwareWrites, keyEvents, perBoard, sameKeyEvents, percentile, us, EXPECT };
+module.exports = {
+  hostRun,
+  hostRunPwm,
+  smfToWire,
+  firmwareWrites,
+  firmwareDutyWrites,
+  changingDutyWrites,
+  dutyEvents,
+  keyEvents,
+  perBoard,
+  sameKeyEvents,
+  sameDutyEvents,
+  percentile,
+  us,
+  EXPECT,
+};

@@ -66,10 +66,16 @@ class Pca9555 {
   }
 }
 
-/** The boards on one I2C controller of the emulated chip, and a log of every transaction. */
+/**
+ * The boards on one I2C controller of the emulated chip, and a log of every transaction.
+ * `Device` is the boards' model (`Pca9685Bus` in `pca9685.js` uses this bus with PCA9685s):
+ * `write(byte, first)` for each data byte acknowledged (`first`: the byte after the address),
+ * `read()`, and `stop()` (if it has one) at the STOP of a write addressed to it, which may
+ * return fields for the write's log entry.
+ */
 class Pca9555Bus {
-  constructor(addresses) {
-    this.boards = addresses.map((a) => new Pca9555(a));
+  constructor(addresses, Device = Pca9555) {
+    this.boards = addresses.map((a) => new Device(a));
     /** Finished transactions: { board, bytes (after the address), startNs, stopNs, read }. */
     this.log = [];
     /** Address phases NACKed. */
@@ -182,7 +188,8 @@ class Pca9555Bus {
         const t = current;
         current = null;
         if (t && t.board !== null) {
-          const entry = { board: t.board, bytes: t.bytes, startNs: t.startNs, stopNs: clock.nanos, read: t.read };
+          const more = t.read ? null : this.boards[t.board].stop?.();
+          const entry = { board: t.board, bytes: t.bytes, startNs: t.startNs, stopNs: clock.nanos, read: t.read, ...more };
           this.log.push(entry);
           if (this.firstDrivenHighNs === null && this.boards.some((b) => b.drivenHigh())) {
             this.firstDrivenHighNs = clock.nanos;

@@ -1,6 +1,7 @@
 'use strict';
 // A Raspberry Pi Pico in rp2040js running firmware/rp2040's ELF: the project's stand-in boot
-// ROM, four PCA9555 boards on I2C0, a DIN MIDI line into UART0 at wire pacing (thru out of
+// ROM, four PCA9555 boards on I2C0 (or, for the `pca9685` build, four PCA9685 with their OE
+// pin on GP6), a DIN MIDI line into UART0 at wire pacing (thru out of
 // its TX collected), a USB host on the USB controller, and the watchdog's reset.
 //
 // The emulated clock runs in ns; the core's cycles advance it at clk_sys. When the core
@@ -13,12 +14,16 @@ const { readElf } = require('./elf.js');
 const { readUf2 } = require('./uf2.js');
 const { standInRom, RomCallError, TRAP } = require('./rom.js');
 const { Pca9555Bus } = require('./pca9555.js');
+const { Pca9685Bus } = require('./pca9685.js');
 const { UsbMidiHost } = require('./usb-midi-host.js');
 const { pl011 } = require('./pl011.js');
 const { usbOutBuffers } = require('./usb-out.js');
 const { dwI2c } = require('./dw-i2c.js');
 
 const ADDRESSES = [0x21, 0x22, 0x23, 0x24];
+/** The `pca9685` build's boards, and the GPIO wired to their OE pins (active low). */
+const PCA9685_ADDRESSES = [0x40, 0x41, 0x42, 0x43];
+const OE_PIN = 6;
 /** One MIDI byte on the wire: 10 bits at 31250 baud. */
 const BYTE_US = 320;
 /** The stack is painted with this byte; what is no longer it was used. */
@@ -40,6 +45,19 @@ function elfPath() {
   );
 }
 
+/**
+ * The `pca9685` build (`ORCH_RP2040_PCA9685_ELF`; firmware/test.sh copies it beside the
+ * default build's ELF) and its UF2 (`ORCH_RP2040_PCA9685_UF2`, or null: the ELF's segments).
+ */
+function pca9685Paths() {
+  return {
+    elf:
+      process.env.ORCH_RP2040_PCA9685_ELF ||
+      path.join(__dirname, '../../rp2040/target/thumbv6m-none-eabi/release/orch-rp2040-pca9685'),
+    uf2: process.env.ORCH_RP2040_PCA9685_UF2 || null,
+  };
+}
+
 const quiet = {
   debug() {},
   info() {},
@@ -50,10 +68,20 @@ const quiet = {
 };
 
 class Pico {
-  constructor({ elf = elfPath(), uf2 = uf2Path() } = {}) {
+  /** `boards`: 'pca9555' (the default build) or 'pca9685' (its ELF and UF2 by default). */
+  constructor({ boards = 'pca9555', elf, uf2 } = {}) {
+    this.kind = boards;
+    if (boards === 'pca9685') {
+      const d = pca9685Paths();
+      elf ??= d.elf;
+      uf2 ??= d.uf2;
+    } else {
+      elf ??= elfPath();
+      uf2 ??= uf2Path();
+    }
     this.elf = readElf(elf);
     this.uf2 = uf2 ? readUf2(uf2) : null;
-    this.bus = new Pca9555Bus(ADDRESSES);
+    this.bus = boards === 'pca9685' ? new Pca9685Bus(PCA9685_ADDRESSES) : new Pca9555Bus(ADDRESSES);
     this.usbHost = new UsbMidiHost();
     /** Bytes the firmware sent on UART0 TX (MIDI thru). */
     this.thru = [];
@@ -123,6 +151,12 @@ class Pico {
       const last = this.led.length ? this.led[this.led.length - 1].on : false;
       if (on !== last) this.led.push({ on, ns: clock.nanos });
     });
+    if (this.kind === 'pca9685') {
+      // OE: the boards' pull-up holds it high (every output off) while GP6 is not driven, as
+      // after a reset; driven low, the outputs are enabled.
+      this.bus.setOutputEnable(false, clock.nanos);
+      chip.gpio[OE_PIN].addListener((state) => this.bus.setOutputEnable(state === 0, clock.nanos)); // GPIOPinState.Low
+    }
     pl011(chip.uart[0]);
     chip.uart[0].onByte = (b) => this.thru.push(b);
     dwI2c(chip.i2c[0]);
@@ -230,8 +264,11 @@ class Pico {
     const end = this.clock.nanos + maxUs * 1000;
     while (this.clock.nanos < end) {
       this.runUs(1000);
-      const inits = this.bus.log.filter((t) => t.bytes[0] === 6).length;
-      if (inits >= 4 && this.usbHost.configured) return;
+      const up =
+        this.kind === 'pca9685'
+          ? this.bus.initialised() && this.bus.oe[this.bus.oe.length - 1].enabled
+          : this.bus.log.filter((t) => t.bytes[0] === 6).length >= 4;
+      if (up && this.usbHost.configured) return;
     }
     throw new Error(
       `not up after ${maxUs} µs: ${this.bus.log.length} bus transactions, USB configured: ${this.usbHost.configured}`,
@@ -252,4 +289,4 @@ class Pico {
   }
 }
 
-module.exports = { Pico, elfPath, uf2Path, ADDRESSES, BYTE_US };
+module.exports = { Pico, elfPath, uf2Path, pca9685Paths, ADDRESSES, PCA9685_ADDRESSES, OE_PIN, BYTE_US };

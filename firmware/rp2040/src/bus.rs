@@ -120,10 +120,11 @@ fn let_go(mask: u32) {
     pac::SIO.gpio_oe(0).value_clr().write_value(mask);
 }
 
-/// For the panic handler: every board's outputs to 0 now, through the I2C registers, with
-/// interrupts off and every wait bounded (a hung bus is given up on: the watchdog's reset and
-/// power-up then release the keys). `addresses`: the boards' 7-bit addresses.
-pub fn release_all_now(addresses: &[u8]) {
+/// For the panic handler: `frame` written to every board now (outputs 0, or every channel
+/// off), through the I2C registers, with interrupts off and every wait bounded (a hung bus is
+/// given up on: the watchdog's reset and power-up then release the keys). `addresses`: the
+/// boards' 7-bit addresses.
+pub fn write_all_now(addresses: &[u8], frame: &[u8]) {
     let i2c = pac::I2C0;
     // End the transfer that was going on, if any.
     i2c.ic_enable().modify(|w| w.set_abort(true));
@@ -133,10 +134,10 @@ pub fn release_all_now(addresses: &[u8]) {
         i2c.ic_tar().write(|w| w.set_ic_tar(address as u16));
         i2c.ic_enable().write(|w| w.set_enable(true));
         let _ = i2c.ic_clr_intr().read();
-        for (byte, last) in [(0x02, false), (0x00, false), (0x00, true)] {
+        for (n, &byte) in frame.iter().enumerate() {
             i2c.ic_data_cmd().write(|w| {
                 w.set_dat(byte);
-                w.set_stop(last);
+                w.set_stop(n + 1 == frame.len());
             });
         }
         spin_until(1_000, || {

@@ -11,7 +11,9 @@
 //!   with orch-boards' async driver: each board initialised outputs-0 FIRST, THEN outputs;
 //!   one write per changed board; 3 attempts, then the board is set aside and initialised
 //!   again every 10 ms with its frame. Every bus operation has a time limit and a hung bus is
-//!   recovered ([`bus`]): a hung board no longer hangs the loop.
+//!   recovered ([`bus`]): a hung board no longer hangs the loop. With the `pca9685` feature,
+//!   four PCA9685 PWM boards at 0x40..=0x43 instead, played with strike and hold, and their
+//!   output-enable pin on GP6 as the hardware stop (`pca9685.rs`); the loop is the same.
 //! - The watchdog (0.5 s), fed by the interpreter loop: a hung loop resets the Pico, and
 //!   power-up releases every key. A panic releases them at once, then waits for the reset.
 //! - The status LED (GP25): a flash for MIDI coming in, blinking for a fault ([`led`]).
@@ -21,8 +23,17 @@
 
 mod bus;
 mod led;
+#[cfg(feature = "pca9685")]
+mod robot;
 
-use core::convert::Infallible;
+// The finger boards: the same interface from either file (`Boards`, `robot`, `changed`,
+// `frame`, `is_off`, `release_all_now`, `ADDRESSES`).
+#[cfg(not(feature = "pca9685"))]
+#[path = "pca9555.rs"]
+mod boards;
+#[cfg(feature = "pca9685")]
+#[path = "pca9685.rs"]
+mod boards;
 
 use embassy_embedded_hal::shared_bus::asynch::i2c::I2cDevice;
 use embassy_executor::Spawner;
@@ -30,6 +41,8 @@ use embassy_futures::select::{select, Either};
 use embassy_rp::bind_interrupts;
 use embassy_rp::gpio::{Level, Output};
 use embassy_rp::i2c::{self, I2c};
+#[cfg(feature = "pca9685")]
+use embassy_rp::peripherals::PIN_6;
 use embassy_rp::peripherals::{I2C0, PIN_0, PIN_1, PIN_25, PIN_4, PIN_5, UART0, USB};
 use embassy_rp::uart::{
     self, BufferedInterruptHandler, BufferedUart, BufferedUartRx, BufferedUartTx,
@@ -44,10 +57,10 @@ use embassy_time::{Duration, Instant as Clock, Timer};
 use embassy_usb::class::midi::MidiClass;
 use embassy_usb::UsbDevice;
 use embedded_io_async::{Read, Write};
-use orch_boards::asynch::Pca9555Async;
-use orch_core::{BoardId, Decoder, FingerBoards, Instant, Interpreter};
-use static_cell::{ConstStaticCell, StaticCell};
+use orch_core::{Decoder, Instant, Interpreter};
+use static_cell::StaticCell;
 
+use crate::boards::Boards;
 use crate::bus::Fault;
 use crate::led::Led;
 
@@ -57,9 +70,7 @@ bind_interrupts!(struct Irqs {
     USBCTRL_IRQ => usb::InterruptHandler<USB>;
 });
 
-/// The boards' 7-bit addresses (the thesis's 0x42..0x48 in write form).
-const ADDRESSES: [u8; 4] = [0x21, 0x22, 0x23, 0x24];
-/// The I2C clock: the PCA9555's fastest.
+/// The I2C clock: the PCA9555's fastest (the PCA9685 boards run at it too).
 const I2C_HZ: u32 = 400_000;
 /// Attempts per board write before the board is set aside.
 const ATTEMPTS: u8 = 3;
@@ -68,7 +79,7 @@ const RETRY: Duration = Duration::from_millis(10);
 /// The watchdog's timeout.
 const WATCHDOG: Duration = Duration::from_millis(500);
 /// Every board.
-const ALL: u8 = 0b1111;
+pub(crate) const ALL: u8 = 0b1111;
 
 /// The pin-out, in one place (the README's table): every GPIO the firmware uses.
 struct Pins {
@@ -82,6 +93,9 @@ struct Pins {
     scl: Peri<'static, PIN_5>,
     /// GP25: the Pico's own LED, the status LED.
     led: Peri<'static, PIN_25>,
+    /// GP6: the PCA9685 boards' OE, active low (`pca9685` builds only).
+    #[cfg(feature = "pca9685")]
+    oe: Peri<'static, PIN_6>,
 }
 
 /// MIDI in, in arrival order, with the µs clock at arrival.
@@ -95,7 +109,8 @@ enum Input {
 static INPUT: Channel<CriticalSectionRawMutex, Input, 64> = Channel::new();
 
 type Bus = Mutex<NoopRawMutex, I2c<'static, I2C0, i2c::Async>>;
-type Board = Pca9555Async<I2cDevice<'static, NoopRawMutex, I2c<'static, I2C0, i2c::Async>>>;
+/// One board's handle on the shared bus.
+pub(crate) type BusDevice = I2cDevice<'static, NoopRawMutex, I2c<'static, I2C0, i2c::Async>>;
 
 fn now_us() -> u64 {
     Clock::now().as_micros()
@@ -110,7 +125,12 @@ async fn main(spawner: Spawner) {
         sda: p.PIN_4,
         scl: p.PIN_5,
         led: p.PIN_25,
+        #[cfg(feature = "pca9685")]
+        oe: p.PIN_6,
     };
+    // The PCA9685 boards' outputs off (OE high) first of all, until they are initialised.
+    #[cfg(feature = "pca9685")]
+    let oe = Output::new(pins.oe, Level::High);
     let mut watchdog = Watchdog::new(p.WATCHDOG);
     let after_reset = watchdog.reset_reason() == Some(ResetReason::TimedOut);
     watchdog.start(WATCHDOG);
@@ -171,20 +191,22 @@ async fn main(spawner: Spawner) {
     let bus = BUS.init(Mutex::new(I2c::new_async(
         p.I2C0, pins.scl, pins.sda, Irqs, i2c_config,
     )));
-    let mut boards: [Board; 4] = ADDRESSES.map(|a| Pca9555Async::new(I2cDevice::new(bus), a));
+    let device = || I2cDevice::new(bus);
+    #[cfg(not(feature = "pca9685"))]
+    let mut boards = Boards::new(device);
+    #[cfg(feature = "pca9685")]
+    let mut boards = Boards::new(device, oe);
 
     interpret(&mut boards, &mut watchdog, led).await
 }
 
 /// The interpreter loop: MIDI in, the guard's timers, the boards, the watchdog, the LED.
-async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog, mut led: Led<'_>) -> ! {
-    // The interpreter in a static (≈ 1.2 KB), built at compile time: never on the stack.
-    static ROBOT: ConstStaticCell<Interpreter> = ConstStaticCell::new(Interpreter::thesis());
-    let robot = ROBOT.take();
+async fn interpret(boards: &mut Boards, watchdog: &mut Watchdog, mut led: Led<'_>) -> ! {
+    let robot = boards::robot();
     let mut usb_decoder: Decoder = Decoder::new();
     let mut failed: u8 = 0;
-    for (i, b) in boards.iter_mut().enumerate() {
-        match bus::within(b.init()).await {
+    for i in 0..4 {
+        match boards.init(i).await {
             Ok(()) => {}
             Err(Fault::Failed) => failed |= 1 << i,
             Err(Fault::TimedOut) => {
@@ -193,6 +215,7 @@ async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog, mut led: Le
             }
         }
     }
+    boards.in_service(failed);
     let mut retry_at = Clock::now() + RETRY;
     loop {
         watchdog.feed(WATCHDOG);
@@ -208,14 +231,18 @@ async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog, mut led: Le
         if failed != 0 {
             wake = wake.min(retry_at);
         }
+        // Whether the boards may have changed: not for a byte that only began a message or
+        // continued one (orch-core's `feed` says so), so the loop does not look for changes
+        // after every byte (a PWM robot's `flush_duties` computes every key's duty).
+        let mut changed = true;
         match select(INPUT.receive(), Timer::at(wake)).await {
             Either::First(Input::Din(byte, at)) => {
-                advance(robot, at);
-                robot.feed(byte, Instant::from_micros(at));
+                advance(robot, boards, &mut failed, at).await;
+                changed = robot.feed(byte, Instant::from_micros(at));
                 led.activity(at);
             }
             Either::First(Input::Usb(bytes, len, at)) => {
-                advance(robot, at);
+                advance(robot, boards, &mut failed, at).await;
                 led.activity(at);
                 for &b in &bytes[..len as usize] {
                     for message in usb_decoder.push(b) {
@@ -223,9 +250,11 @@ async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog, mut led: Le
                     }
                 }
             }
-            Either::Second(()) => advance(robot, now_us()),
+            Either::Second(()) => advance(robot, boards, &mut failed, now_us()).await,
         }
-        write(robot, boards, &mut failed).await;
+        if changed {
+            write(robot, boards, &mut failed).await;
+        }
         if failed != 0 && Clock::now() >= retry_at {
             // Boards set aside are initialised again, and sent their frame, once the bus is
             // usable (a hung transfer ended, SDA cleared).
@@ -234,43 +263,31 @@ async fn interpret(boards: &mut [Board; 4], watchdog: &mut Watchdog, mut led: Le
             }
             retry_at = Clock::now() + RETRY;
         }
+        boards.in_service(failed);
     }
 }
 
-/// Runs the guard's timers due by `at`, each at its own deadline.
-fn advance(robot: &mut Interpreter, at: u64) {
+/// Runs the guard's timers due by `at`, each at its own deadline (a strike's end among them),
+/// and writes what each changed, as orch-core on the host flushes after each.
+async fn advance(robot: &mut Interpreter, boards: &mut Boards, failed: &mut u8, at: u64) {
     while let Some(d) = robot.next_deadline().filter(|d| d.as_micros() <= at) {
         robot.tick(d);
-    }
-}
-
-/// The frame's changed boards, as orch-core's flush hands them over (it takes them as
-/// written; the async writes follow).
-#[derive(Default)]
-struct Changed([Option<u16>; 4]);
-
-impl FingerBoards for Changed {
-    type Error = Infallible;
-    fn write_board(&mut self, board: BoardId, outputs: u16) -> Result<(), Infallible> {
-        self.0[board.index as usize & 3] = Some(outputs);
-        Ok(())
+        write(robot, boards, failed).await;
     }
 }
 
 /// Writes every changed board, [`ATTEMPTS`] times at most; a board that fails is set aside
 /// in `failed` (the retry round initialises it again and sends its frame). A write that runs
 /// out of time has hung the bus: every board is set aside until the bus is recovered.
-async fn write(robot: &mut Interpreter, boards: &mut [Board; 4], failed: &mut u8) {
-    let mut changed = Changed::default();
-    let _ = robot.flush(&mut changed);
-    for (i, outputs) in changed.0.into_iter().enumerate() {
-        let Some(outputs) = outputs else { continue };
+async fn write(robot: &mut Interpreter, boards: &mut Boards, failed: &mut u8) {
+    for (i, frame) in boards::changed(robot).into_iter().enumerate() {
+        let Some(frame) = frame else { continue };
         if *failed & (1 << i) != 0 {
             continue;
         }
         let mut result = Err(Fault::Failed);
         for _ in 0..ATTEMPTS {
-            result = bus::within(boards[i].set_outputs(outputs)).await;
+            result = boards.set(i, &frame).await;
             if result != Err(Fault::Failed) {
                 break;
             }
@@ -286,16 +303,16 @@ async fn write(robot: &mut Interpreter, boards: &mut [Board; 4], failed: &mut u8
     }
 }
 
-/// The retry round: every board set aside is initialised again (outputs 0 first) and sent
-/// its frame; one that still fails stays aside, and a timeout sets them all aside again.
-async fn retry(robot: &Interpreter, boards: &mut [Board; 4], failed: &mut u8) {
-    for (i, b) in boards.iter_mut().enumerate() {
+/// The retry round: every board set aside is initialised again (every output off first) and
+/// sent its frame; one that still fails stays aside, and a timeout sets them all aside again.
+async fn retry(robot: &Interpreter, boards: &mut Boards, failed: &mut u8) {
+    for i in 0..4 {
         if *failed & (1 << i) == 0 {
             continue;
         }
-        let outputs = robot.frame().outputs(i);
-        let result = match bus::within(b.init()).await {
-            Ok(()) if outputs != 0 => bus::within(b.set_outputs(outputs)).await,
+        let frame = boards::frame(robot, i);
+        let result = match boards.init(i).await {
+            Ok(()) if !boards::is_off(&frame) => boards.set(i, &frame).await,
             other => other,
         };
         match result {
@@ -361,6 +378,6 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
     // Every key up at once, then the watchdog resets the Pico (and power-up releases every
     // key again, should the bus have been hung now).
     cortex_m::interrupt::disable();
-    bus::release_all_now(&ADDRESSES);
+    boards::release_all_now();
     loop {}
 }

@@ -6,6 +6,11 @@
 //!   event packet at T µs), `end T` (run the guard's timers up to T µs). It prints every
 //!   board write, one a line: `write T BOARD OUTPUTS` (µs, 0..4, the 16 outputs), then
 //!   `outputs O0 O1 O2 O3` (the final frame). Numbers are decimal, or hex with `0x`.
+//! - `orch-rp2040-expect pca9685` does the same for the firmware's `pca9685` build: the
+//!   settings in `firmware/rp2040/src/robot.rs` (included here, so both run the same ones:
+//!   four PCA9685 boards, strike and hold), flushed with `flush_duties`; it prints every
+//!   `write_duties` as `duties T BOARD D0 .. D15` (µs, 0..4, each channel's duty 0..=4095),
+//!   then `final BOARD D0 .. D15` for each board.
 //! - `orch-rp2040-expect smf FILE` prints a Standard MIDI File's channel messages as timed
 //!   wire bytes, `T B` a line (µs from the start), in time order, with the tempo map.
 //!
@@ -15,7 +20,11 @@
 
 use std::io::{BufRead, Write};
 
-use orch_core::{BoardId, Decoder, FingerBoards, Instant, Interpreter};
+use orch_core::{BoardId, Decoder, Duty, FingerBoards, Instant, Interpreter};
+
+/// The firmware's settings for its `pca9685` build.
+#[path = "../../../rp2040/src/robot.rs"]
+mod robot;
 
 /// Board writes with the time they were made.
 struct Recorder<'a, W: Write> {
@@ -32,6 +41,13 @@ impl<W: Write> FingerBoards for Recorder<'_, W> {
             self.now_us, board.index, outputs
         )
     }
+    fn write_duties(&mut self, board: BoardId, duties: &[Duty; 16]) -> std::io::Result<()> {
+        write!(self.out, "duties {} {}", self.now_us, board.index)?;
+        for d in duties {
+            write!(self.out, " {}", d.get())?;
+        }
+        writeln!(self.out)
+    }
 }
 
 /// The firmware's interpreter loop, on the host.
@@ -39,6 +55,8 @@ struct Loop<'a, W: Write> {
     robot: Interpreter,
     usb: Decoder,
     boards: Recorder<'a, W>,
+    /// PWM boards: flush with `flush_duties`.
+    pwm: bool,
 }
 
 impl<W: Write> Loop<'_, W> {
@@ -52,10 +70,13 @@ impl<W: Write> Loop<'_, W> {
 
     fn flush(&mut self, at: u64) -> std::io::Result<()> {
         self.boards.now_us = at;
-        self.robot
-            .flush(&mut self.boards)
-            .map(drop)
-            .map_err(|e| e.error)
+        if self.pwm {
+            self.robot.flush_duties(&mut self.boards)
+        } else {
+            self.robot.flush(&mut self.boards)
+        }
+        .map(drop)
+        .map_err(|e| e.error)
     }
 
     fn line(&mut self, line: &str) -> Result<(), String> {
@@ -149,11 +170,23 @@ fn run() -> Result<(), String> {
         }
         return out.flush().map_err(|e| e.to_string());
     }
-    if !args.is_empty() {
-        return Err("usage: orch-rp2040-expect [smf FILE] (inputs on standard input)".into());
-    }
+    let pwm = match &args[..] {
+        [] => false,
+        [kind] if kind == "pca9685" => true,
+        _ => {
+            return Err(
+                "usage: orch-rp2040-expect [pca9685 | smf FILE] (inputs on standard input)".into(),
+            )
+        }
+    };
+    let robot = if pwm {
+        Interpreter::new(robot::PCA9685).map_err(|e| e.to_string())?
+    } else {
+        Interpreter::thesis()
+    };
     let mut l = Loop {
-        robot: Interpreter::thesis(),
+        pwm,
+        robot,
         usb: Decoder::new(),
         boards: Recorder {
             now_us: 0,
@@ -163,7 +196,17 @@ fn run() -> Result<(), String> {
     for line in std::io::stdin().lock().lines() {
         l.line(&line.map_err(|e| e.to_string())?)?;
     }
+    let duties = l.robot.duties();
     let o: [u16; 4] = std::array::from_fn(|i| l.robot.frame().outputs(i));
+    if pwm {
+        for (b, duties) in duties.iter().enumerate() {
+            write!(out, "final {b}").map_err(|e| e.to_string())?;
+            for d in duties {
+                write!(out, " {}", d.get()).map_err(|e| e.to_string())?;
+            }
+            writeln!(out).map_err(|e| e.to_string())?;
+        }
+    }
     writeln!(out, "outputs {} {} {} {}", o[0], o[1], o[2], o[3]).map_err(|e| e.to_string())?;
     out.flush().map_err(|e| e.to_string())
 }
