@@ -117,6 +117,11 @@ pub struct PlayArgs {
     /// these are its virtual copy's writes, at the far end of the line.
     #[arg(long, value_name = "FILE")]
     pub writes: Option<PathBuf>,
+    /// Write the note-by-note account to FILE: one JSON object a line for every note of the
+    /// file, in score order (see the README's `--notes`); with several outputs, each robot's
+    /// in turn, with its "out".
+    #[arg(long, value_name = "FILE")]
+    pub notes: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -132,6 +137,10 @@ pub struct AnalyzeArgs {
     /// Tempo factor: 2 plays twice as fast, 0.5 half as fast.
     #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
     pub tempo: f64,
+    /// Write the note-by-note account to FILE: one JSON object a line for every note of the
+    /// file, in score order (see the README's `--notes`).
+    #[arg(long, value_name = "FILE")]
+    pub notes: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]

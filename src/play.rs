@@ -1,8 +1,9 @@
 //! `orch play` and `orch analyze`: a Standard MIDI File performed on the virtual robot by
 //! `orch-perform`, and the report.
 
-use std::io::{IsTerminal, Write};
-use std::path::Path;
+use std::fs::File;
+use std::io::{BufWriter, IsTerminal, Write};
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -107,13 +108,10 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
         // Every write is kept for the file, not only the presses the report needs.
         setup.sim.keep = orch_sim::Keep::Everything;
     }
-    let writes = match &args.writes {
-        Some(path) => Some(std::io::BufWriter::new(
-            std::fs::File::create(path)
-                .map_err(|e| bad_input(format!("--writes {}: {e}", path.display())))?,
-        )),
-        None => None,
-    };
+    let writes = create(&args.writes, "--writes")?;
+    let notes_file = create(&args.notes, "--notes")?;
+    // The song is kept for the account's bars and beats (a live play takes it).
+    let song_for_notes = args.notes.is_some().then(|| song.clone());
     let specs = out_specs(&args.outs)?;
     if args.fast {
         if let Some(s) = specs.iter().find(|s| s.target != Target::Sim) {
@@ -162,8 +160,53 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
         write_board_writes(&mut file, &played)
             .with_context(|| format!("--writes {}", path.display()))?;
     }
+    if let (Some(mut file), Some(path), Some(song)) = (notes_file, &args.notes, &song_for_notes) {
+        let several = played.len() > 1;
+        for (spec, p, _) in &played {
+            let out = several.then_some(spec.text.as_str());
+            write_account(&mut file, song, p, setup.tempo, out)
+                .with_context(|| format!("--notes {}", path.display()))?;
+        }
+    }
     // The comparison without compensation is `orch analyze`'s: a play renders once.
     print_reports(&played, args.json, &args.file, !args.outs.is_empty())
+}
+
+/// Creates the file an option names, if it names one.
+fn create(path: &Option<PathBuf>, option: &str) -> anyhow::Result<Option<BufWriter<File>>> {
+    match path {
+        Some(path) => {
+            Ok(Some(BufWriter::new(File::create(path).map_err(|e| {
+                bad_input(format!("{option} {}: {e}", path.display()))
+            })?)))
+        }
+        None => Ok(None),
+    }
+}
+
+/// `--notes`: the note-by-note account of `played`, one JSON object a line, in score order
+/// (with `"out"` first when several robots played). Bars and beats are the song's own: the
+/// tempo factor it was played at is undone.
+fn write_account(
+    file: &mut impl Write,
+    song: &Song,
+    played: &Played,
+    tempo: Tempo,
+    out: Option<&str>,
+) -> anyhow::Result<()> {
+    let lines = played.account(|t_ms| song.bar_beat((t_ms * 1000.0 * tempo.get()).round() as u64));
+    for line in lines {
+        let mut value = serde_json::to_value(&line)?;
+        if let (Some(out), Some(map)) = (out, value.as_object_mut()) {
+            let mut with = serde_json::Map::new();
+            with.insert("out".into(), out.into());
+            with.extend(std::mem::take(map));
+            *map = with;
+        }
+        writeln!(file, "{value}")?;
+    }
+    file.flush()?;
+    Ok(())
 }
 
 /// `--writes`: every robot's board writes, one JSON object a line, robot after robot.
@@ -173,12 +216,22 @@ fn write_board_writes(
 ) -> anyhow::Result<()> {
     for (spec, p, _) in played {
         for w in &p.performance.writes {
-            let line = serde_json::json!({
-                "out": spec.text,
-                "t_us": w.end.as_micros(),
-                "address": w.address,
-                "outputs": w.driven,
-            });
+            // A PCA9685's write: its 16 channels' duties after it (0..=4095); a PCA9555's: the
+            // 16 pins it drives.
+            let line = match w.duty {
+                Some(duty) => serde_json::json!({
+                    "out": spec.text,
+                    "t_us": w.end.as_micros(),
+                    "address": w.address,
+                    "duty": duty,
+                }),
+                None => serde_json::json!({
+                    "out": spec.text,
+                    "t_us": w.end.as_micros(),
+                    "address": w.address,
+                    "outputs": w.driven,
+                }),
+            };
             writeln!(file, "{line}")?;
         }
     }
@@ -798,6 +851,16 @@ pub fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
     let played = render(&song, &setup)?;
     let report = played.report(uncompensated(&song, &setup)?);
     let wrong = went_wrong(&song, &played, setup.tempo);
+    if let Some(mut file) = create(&args.notes, "--notes")? {
+        write_account(&mut file, &song, &played, setup.tempo, None).with_context(|| {
+            format!(
+                "--notes {}",
+                args.notes
+                    .as_ref()
+                    .map_or(String::new(), |p| p.display().to_string())
+            )
+        })?;
+    }
     let mut out = std::io::stdout().lock();
     if args.json {
         let a = Analysis {

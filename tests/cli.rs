@@ -481,6 +481,102 @@ fn config_for_pca9685_boards_reads_back_and_interpret_writes_their_duties() {
     assert_eq!(plain.stdout, named.stdout);
 }
 
+/// `--notes`: one line for every note of the file, in score order, whose counts are the
+/// report's, on the thesis's robot and on PCA9685 boards, for play and for analyze.
+#[test]
+fn the_note_by_note_account_has_every_note_in_score_order_and_the_reports_counts() {
+    let dir = std::env::temp_dir().join(format!("orch-notes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let pwm = dir.join("pwm.toml");
+    let out = orch()
+        .args(["config", "--boards", "pca9685"])
+        .output()
+        .unwrap();
+    std::fs::write(&pwm, &out.stdout).unwrap();
+    for file in ["beethoven-op18no1-mvt1.mid", "bach-bwv66-6-chorale.mid"] {
+        for robot in [None, Some(&pwm)] {
+            for command in ["play", "analyze"] {
+                let notes = dir.join("notes.jsonl");
+                let mut cmd = orch();
+                cmd.arg(command);
+                if command == "play" {
+                    cmd.arg("--fast");
+                }
+                if let Some(r) = robot {
+                    cmd.arg("--robot").arg(r);
+                }
+                let out = cmd
+                    .arg("--json")
+                    .arg("--notes")
+                    .arg(&notes)
+                    .arg(corpus(file))
+                    .output()
+                    .unwrap();
+                let what = format!("{command} {file} on {robot:?}");
+                assert!(out.status.success(), "{what}");
+                let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+                let lines = json_lines(&std::fs::read(&notes).unwrap());
+                assert_eq!(
+                    lines.len() as u64,
+                    report["notes"].as_u64().unwrap(),
+                    "{what}"
+                );
+                let count = |outcome: &str, reason: Option<&str>| {
+                    lines
+                        .iter()
+                        .filter(|l| {
+                            l["outcome"] == outcome && reason.is_none_or(|r| l["reason"] == r)
+                        })
+                        .count() as u64
+                };
+                let o = &report["outcomes"];
+                for name in ["on_time", "late", "early", "unison", "joined", "skipped"] {
+                    assert_eq!(
+                        count(name, None),
+                        o[name].as_u64().unwrap(),
+                        "{what}: {name}"
+                    );
+                }
+                for (reason, n) in o["dropped"].as_object().unwrap() {
+                    assert_eq!(
+                        count("dropped", Some(reason)),
+                        n.as_u64().unwrap(),
+                        "{what}: {reason}"
+                    );
+                }
+                assert_eq!(
+                    count("unmatched", None),
+                    report["unmatched"].as_u64().unwrap()
+                );
+                let mut last = f64::MIN;
+                for l in &lines {
+                    let t = l["t_ms"].as_f64().unwrap();
+                    assert!(t >= last, "{what}: score order");
+                    last = t;
+                    assert!(l["bar"].as_u64().unwrap() >= 1 && l["beat"].as_u64().unwrap() >= 1);
+                    assert!((1..=16).contains(&l["channel"].as_u64().unwrap()));
+                    let struck =
+                        matches!(l["outcome"].as_str(), Some("on_time" | "late" | "early"));
+                    assert_eq!(l["sounded_ms"].is_null(), !struck, "{what}: {l}");
+                    assert_eq!(
+                        l["reason"].is_null(),
+                        l["outcome"] != "dropped",
+                        "{what}: {l}"
+                    );
+                    if struck {
+                        let (h, e) = (
+                            l["sounded_ms"].as_f64().unwrap(),
+                            l["onset_ms"].as_f64().unwrap(),
+                        );
+                        assert!((h - t - e).abs() < 0.002, "{what}: {l}");
+                        assert!(l["sent_ms"].as_f64().unwrap() < h, "{what}: {l}");
+                    }
+                }
+            }
+        }
+    }
+}
+
 fn corpus(name: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../shared/midi")

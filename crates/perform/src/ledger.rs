@@ -6,7 +6,7 @@
 //! whether a note struck, joined or was dropped and why, and the robot says when the strike
 //! sounded.
 //!
-//! Memory: 24 bytes a note, plus the strikes of each key not yet matched to a press (a
+//! Memory: 32 bytes a note, plus the strikes of each key not yet matched to a press (a
 //! handful); presses are matched as they come and not kept.
 
 use std::collections::VecDeque;
@@ -76,7 +76,7 @@ impl Outcome {
     }
 }
 
-/// One score note and what became of it: 24 bytes.
+/// One score note and what became of it: 32 bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct NoteRecord {
     /// When the score wants it to sound, wall µs.
@@ -94,6 +94,16 @@ pub struct NoteRecord {
     /// How loud its own strike sounded, on the MIDI velocity scale (the virtual robot's
     /// loudness; see `orch_sim::Press::velocity`), if it sounded.
     pub sounded_velocity: Option<u8>,
+    /// When its Note-On was sent to the robot, wall µs, plus one; 0 if it was not (see
+    /// [`sent_us`](Self::sent_us): 8 bytes, not an `Option`'s 16).
+    sent: u64,
+}
+
+impl NoteRecord {
+    /// When its Note-On was sent to the robot, wall µs, if it was.
+    pub fn sent_us(&self) -> Option<u64> {
+        self.sent.checked_sub(1)
+    }
 }
 
 /// The outcome of a note not delivered yet, or waiting to strike: if the account closes so, it
@@ -140,6 +150,7 @@ impl Ledger {
                     landing: None,
                     velocity: 0,
                     sounded_velocity: None,
+                    sent: 0,
                 },
             );
         }
@@ -162,8 +173,10 @@ impl Ledger {
         self.entry(id).score_at_us = score_at_us;
     }
 
-    /// Its Note-On was delivered to the robot (its first event comes when the robot decodes it).
-    pub fn delivered(&mut self, id: NoteId) {
+    /// Its Note-On was delivered to the robot at `t_us` (its first event comes when the robot
+    /// decodes it).
+    pub fn delivered(&mut self, id: NoteId, t_us: u64) {
+        self.entry(id).sent = t_us.saturating_add(1);
         self.in_flight.push_back(id);
     }
 

@@ -57,6 +57,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod account;
 pub mod conduct;
 pub mod follow;
 pub mod ledger;
@@ -69,6 +70,7 @@ pub mod report;
 pub mod robot;
 pub mod tempo;
 
+pub use account::NoteLine;
 pub use conduct::{
     Action, ConductError, Cue, MidiClock, OscCues, ScoreBeats, TapTempo, TempoSource, Timed,
 };

@@ -906,7 +906,7 @@ fn deliver<M: MidiOut>(
     ledger: &mut Ledger,
 ) -> Result<(), PerformError> {
     if let Some(id) = note {
-        ledger.delivered(id);
+        ledger.delivered(id, t);
     }
     match out {
         Out::Virtual => robot.feed(t, bytes).map_err(robot_err)?,

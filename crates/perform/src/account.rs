@@ -1,0 +1,110 @@
+//! The note-by-note account of a performance: one line for every note of the score, in score
+//! order, saying what became of it. What `--notes` writes and a piano roll or a web page draws
+//! from; its counts are the report's.
+
+use serde::Serialize;
+
+use crate::ledger::{NoteRecord, Outcome};
+use crate::performer::Played;
+
+/// One note of the account (`orch play --notes`, `orch analyze --notes`), as one JSON object:
+///
+/// `{"t_ms":T,"bar":B,"beat":X,"note":N,"channel":C,"velocity":V,"key":K,"outcome":O,
+/// "reason":R,"sent_ms":S,"sounded_ms":H,"onset_ms":E,"sounded_velocity":W}`
+///
+/// Times are ms from the start of the performance (score time 0). `reason` is there only for
+/// a dropped note; `sent_ms`, `sounded_ms`, `onset_ms` and `sounded_velocity` are `null` where
+/// there is none (a note never sent; a note with no strike of its own: joined, unison,
+/// dropped, skipped).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct NoteLine {
+    /// When the score wants it to sound, ms.
+    pub t_ms: f64,
+    /// Its bar, counted from 1 by the file's time signatures (4/4 until the first).
+    pub bar: u32,
+    /// Its beat in the bar, from 1.
+    pub beat: u32,
+    /// The MIDI note number, as written (before any folding).
+    pub note: u8,
+    /// Its channel, 1..=16 as people count them.
+    pub channel: u8,
+    /// Its velocity in the file.
+    pub velocity: u8,
+    /// The key it landed on (0 = the robot's lowest), `null` if none.
+    pub key: Option<u8>,
+    /// `on_time`, `late`, `early`, `unison`, `joined`, `dropped`, `unmatched` or `skipped`
+    /// (the report's outcomes).
+    pub outcome: &'static str,
+    /// Why it was dropped (`channel`, `range`, `power`, `too_fast`, `too_soft`, `cancelled`,
+    /// `stopped`); only for `dropped`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<&'static str>,
+    /// When its Note-On was sent, ms.
+    pub sent_ms: Option<f64>,
+    /// When its own strike sounded, ms.
+    pub sounded_ms: Option<f64>,
+    /// Sounded − score, ms (positive: late).
+    pub onset_ms: Option<f64>,
+    /// How loud its own strike sounded, on the MIDI velocity scale.
+    pub sounded_velocity: Option<u8>,
+}
+
+/// The outcome's word in the account, and the reason of a drop.
+fn words(o: Outcome) -> (&'static str, Option<&'static str>) {
+    match o {
+        Outcome::Dropped(r) => ("dropped", Some(r.name())),
+        o => (o.name(), None),
+    }
+}
+
+/// ms, rounded to the µs.
+fn ms(us: i64) -> f64 {
+    us as f64 / 1000.0
+}
+
+impl Played {
+    /// The account: one line for every record (every score note, and every note played again
+    /// after a jump back), in score order. `bar_beat` gives a note's bar and beat from its
+    /// time in ms from the start of the performance (the front end knows the song and the
+    /// tempo it was played at).
+    pub fn account(&self, bar_beat: impl Fn(f64) -> (u32, u32)) -> Vec<NoteLine> {
+        let start = self.start_us as i64;
+        let mut lines: Vec<(i64, usize, NoteLine)> = self
+            .records
+            .iter()
+            .enumerate()
+            .map(|(i, r)| (r.score_at_us, i, self.line(r, start, &bar_beat)))
+            .collect();
+        // Score order: by time, and in the file's order at the same time (a record's index is
+        // its note's place among the Note-Ons).
+        lines.sort_by_key(|(t, i, _)| (*t, *i));
+        lines.into_iter().map(|(_, _, l)| l).collect()
+    }
+
+    fn line(&self, r: &NoteRecord, start: i64, bar_beat: &impl Fn(f64) -> (u32, u32)) -> NoteLine {
+        let t_ms = ms(r.score_at_us - start);
+        let (bar, beat) = bar_beat(t_ms.max(0.0));
+        let (outcome, reason) = words(r.outcome);
+        let onset_us = match r.outcome {
+            Outcome::OnTime { error_us } => Some(i64::from(error_us)),
+            Outcome::Late { by_us } => Some(i64::from(by_us)),
+            Outcome::Early { by_us } => Some(-i64::from(by_us)),
+            _ => None,
+        };
+        NoteLine {
+            t_ms,
+            bar,
+            beat,
+            note: r.note,
+            channel: r.channel + 1,
+            velocity: r.velocity,
+            key: r.landing.map(|l| l.key),
+            outcome,
+            reason,
+            sent_ms: r.sent_us().map(|t| ms(t as i64 - start)),
+            sounded_ms: onset_us.map(|e| ms(r.score_at_us + e - start)),
+            onset_ms: onset_us.map(ms),
+            sounded_velocity: onset_us.and(r.sounded_velocity),
+        }
+    }
+}
