@@ -922,34 +922,35 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// duty less the allowed duty for the strike time, then at its hold duty less it.
     fn duty_cut_after_by_energy(&self, key: u8) -> Option<u32> {
         let d = self.duty()?;
-        let (on, window) = (d.max_on.as_micros() as u128, d.window.as_micros() as u128);
-        let full = Duty::FULL.get() as u128;
+        let full = Duty::FULL.get() as u64;
+        // The allowed duty in 4095ths, rounded down: the key heats a little faster than
+        // exactly, so a cut never comes later than the exact one (at most 1/4095 of full
+        // power earlier). 64-bit arithmetic throughout: a Cortex-M0+ has no 128-bit divide.
+        let allowed = d.max_on.as_micros() as u64 * full / (d.window.as_micros() as u64).max(1);
         let dynamics = &self.config.dynamics;
         let touch = dynamics.touch(key);
-        let strike_duty = touch.strike_duty(self.velocity(key)).get() as u128;
-        let hold_duty = touch.hold.get() as u128;
-        let s = dynamics.strike.as_micros() as u128;
-        // Heat in µs at full power; rates in (µs of heat) per µs, as fractions over
-        // `full × window`: duty/full − on/window.
-        let heat = self.fingers.heat_ms(key) as u128 * 1000;
-        let allowed = on * full;
-        let left = on.saturating_sub(heat);
-        // The strike phase.
-        let strike_rate = (strike_duty * window).saturating_sub(allowed);
-        let reach = |left: u128, rate: u128| -> Option<u128> {
-            (rate > 0).then(|| (left * full * window).div_ceil(rate))
-        };
-        if let Some(t) = reach(left, strike_rate) {
+        let strike_duty = touch.strike_duty(self.velocity(key)).get() as u64;
+        let hold_duty = touch.hold.get() as u64;
+        let s = dynamics.strike.as_micros() as u64;
+        // Heat in µs at full power: a key at duty `x` (4095ths) adds (x − allowed) / 4095 µs
+        // of it each µs.
+        let on = d.max_on.as_micros() as u64;
+        let heat = self.fingers.heat_ms(key) as u64 * 1000;
+        // µs until `left` more heat at `rate` 4095ths over the allowed (rounded down: early).
+        let reach = |left: u64, rate: u64| (rate > 0).then(|| left * full / rate);
+        if let Some(t) = reach(on.saturating_sub(heat), strike_duty.saturating_sub(allowed)) {
             if t <= s {
-                return Some(t.min(u32::MAX as u128) as u32);
+                return Some(t.min(u32::MAX as u64) as u32);
             }
         }
-        // After the strike: the heat it left, then the hold.
-        let after = (heat * full * window + s * strike_duty * window).saturating_sub(s * allowed)
-            / (full * window);
-        let left = on.saturating_sub(after);
-        let hold_rate = (hold_duty * window).saturating_sub(allowed);
-        reach(left, hold_rate).map(|t| (s + t).min(u32::MAX as u128) as u32)
+        // After the strike: the heat it left (rounded up), then the hold.
+        let after = if strike_duty >= allowed {
+            heat + (s * (strike_duty - allowed)).div_ceil(full)
+        } else {
+            heat.saturating_sub(s * (allowed - strike_duty) / full)
+        };
+        reach(on.saturating_sub(after), hold_duty.saturating_sub(allowed))
+            .map(|t| (s + t).min(u32::MAX as u64) as u32)
     }
 
     fn apply<S: NoteSink>(&mut self, message: Message, now: u32, sink: &mut S) {

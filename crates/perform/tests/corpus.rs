@@ -91,7 +91,27 @@ fn every_corpus_file_on_pwm_boards_adds_up_and_sounds_at_its_velocity() {
             assert!(r.onset_ms.median <= 0.6, "{file}: {:?}", r.onset_ms);
             medians.push(r.onset_ms.median);
         }
+        // The note-by-note account says the same, note by note.
+        let account = played.account(|_| (1, 1));
+        assert_eq!(account.len() as u64, r.notes, "{file}");
+        let count = |name: &str| account.iter().filter(|l| l.outcome == name).count() as u64;
         let o = r.outcomes;
+        assert_eq!(
+            [
+                count("on_time"),
+                count("late"),
+                count("unison"),
+                count("joined"),
+                count("dropped")
+            ],
+            [o.on_time, o.late, o.unison, o.joined, o.dropped.total()],
+            "{file}"
+        );
+        let soft = account
+            .iter()
+            .filter(|l| l.reason == Some("too_soft"))
+            .count() as u64;
+        assert_eq!(soft, o.dropped.too_soft, "{file}");
         all.on_time += o.on_time;
         all.late += o.late;
         all.dropped.power += o.dropped.power;
