@@ -251,8 +251,13 @@ pub(crate) fn open_lanes(specs: Vec<OutSpec>, setup: &Setup) -> anyhow::Result<V
             },
             ..setup.clone()
         };
-        let out = Output::open(&spec.target, &setup.config)
-            .map_err(|e| bad_input(format!("--out {}: {e}", spec.text)))?;
+        let out = Output::open(
+            &spec.target,
+            &setup.config,
+            &setup.sim.kinds,
+            setup.sim.pwm_hz,
+        )
+        .map_err(|e| bad_input(format!("--out {}: {e}", spec.text)))?;
         lanes.push(Lane { spec, setup, out });
     }
     Ok(lanes)

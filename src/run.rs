@@ -275,7 +275,7 @@ struct Thru {
 
 impl Thru {
     fn start(spec: OutSpec, robot: &Robot) -> anyhow::Result<Thru> {
-        let mut out = Output::open(&spec.target, &robot.config)
+        let mut out = Output::open(&spec.target, &robot.config, &robot.kinds, robot.pwm_hz)
             .map_err(|e| bad_input(format!("--thru {}: {e}", spec.text)))?
             .ok_or_else(|| bad_input("--thru sim: the virtual robot is --out sim"))?;
         let (tx, rx) = mpsc::channel::<Option<Vec<u8>>>();
@@ -376,18 +376,19 @@ fn open_out(spec: &OutSpec, robot: &Robot) -> anyhow::Result<Out> {
     }
     match &spec.target {
         Target::Sim => Ok(Out::Sim(Box::new(sim(robot)?))),
-        Target::I2c(_) if robot.has_dynamics() => Err(bad_input(format!(
-            "--out {}: PCA9685 (PWM) boards on a Linux I2C bus are not driven yet; i2c outputs \
-             drive PCA9555/TCA9555 boards (--out sim plays PCA9685 ones)",
-            spec.text
-        ))),
         Target::I2c(path) => {
             let bus = open_i2c(&path.to_string_lossy())?;
-            let addresses: Vec<u8> = robot.config.layout.boards[..robot.boards]
+            let boards: Vec<(u8, orch_core::BoardKind)> = robot.config.layout.boards
+                [..robot.boards]
                 .iter()
-                .map(|b| b.address)
+                .zip(&robot.kinds)
+                .map(|(b, &kind)| (b.address, kind))
                 .collect();
-            Ok(Out::I2c(Box::new(ResilientBoards::new(bus, &addresses)?)))
+            Ok(Out::I2c(Box::new(ResilientBoards::with_kinds(
+                bus,
+                &boards,
+                robot.pwm_hz,
+            )?)))
         }
         _ => Err(bad_input(format!(
             "--out {}: orch run drives finger boards (sim or i2c:DEVICE); a MIDI output goes \

@@ -60,22 +60,38 @@ impl<I2C: I2c, const N: usize> MixedBoardSet<I2C, N> {
     /// an output), a PCA9685 as [`Pca9685::init`](crate::Pca9685::init) does at `pwm_hz`
     /// (every channel off first). Stops at the first board that fails.
     pub fn init(&mut self, pwm_hz: u32, delay: &mut impl DelayNs) -> Result<(), Error<I2C::Error>> {
-        let prescale = Prescale::from_hz(pwm_hz).ok_or(Error::Frequency { hz: pwm_hz })?;
         for i in 0..self.len {
-            let address = self.addresses[i];
-            match self.kinds[i] {
-                BoardKind::OnOff => {
-                    self.last[i] = None;
-                    self.i2c.write(address, &frames::outputs(0))?;
-                    self.i2c.write(address, &frames::ALL_OUTPUTS)?;
-                    self.last[i] = Some(0);
-                }
-                BoardKind::Pwm => {
-                    device::init(&mut self.i2c, address, &mut self.pwm[i], prescale, delay)?
-                }
-            }
+            self.init_board(i as u8, pwm_hz, delay)?;
         }
         Ok(())
+    }
+
+    /// Initialises board `index` as [`init`](Self::init) does (a board that came back after
+    /// a power cycle, say).
+    pub fn init_board(
+        &mut self,
+        index: u8,
+        pwm_hz: u32,
+        delay: &mut impl DelayNs,
+    ) -> Result<(), Error<I2C::Error>> {
+        let i = usize::from(index);
+        if i >= self.len {
+            return Err(Error::UnknownBoard(index));
+        }
+        let address = self.addresses[i];
+        match self.kinds[i] {
+            BoardKind::OnOff => {
+                self.last[i] = None;
+                self.i2c.write(address, &frames::outputs(0))?;
+                self.i2c.write(address, &frames::ALL_OUTPUTS)?;
+                self.last[i] = Some(0);
+                Ok(())
+            }
+            BoardKind::Pwm => {
+                let prescale = Prescale::from_hz(pwm_hz).ok_or(Error::Frequency { hz: pwm_hz })?;
+                device::init(&mut self.i2c, address, &mut self.pwm[i], prescale, delay)
+            }
+        }
     }
 
     /// Every output of every board off: tries every board, returns the first error.

@@ -1,16 +1,19 @@
-//! Finger boards driven from this host: `orch-boards`' PCA9555 driver on any I2C bus (Linux
-//! `/dev/i2c-N` through `linux-embedded-hal`, or the virtual robot's bus in tests), made to
-//! survive a bad bus.
+//! Finger boards driven from this host: `orch-boards`' PCA9555 and PCA9685 drivers on any I2C
+//! bus (Linux `/dev/i2c-N` through `linux-embedded-hal`, or the virtual robot's bus in tests),
+//! made to survive a bad bus.
 //!
-//! [`ResilientBoards`] wraps a [`FingerBoardSet`]:
+//! [`ResilientBoards`] wraps a [`MixedBoardSet`] (each board on/off or PWM, as robot.toml
+//! says; a PWM board gets the duties of the core's strike-and-hold profile):
 //!
 //! - a failed write (a NACK, a timeout, a lost arbitration) is tried again
 //!   [`RETRIES`] times, pausing 100 µs, 200 µs, 400 µs between tries;
 //! - a board that still does not answer is **lost**: said once (a `tracing` warning), left out
 //!   while the other boards play on, and tried again with backoff (from 10 ms, doubling up to
-//!   1 s of performance time); when it answers it is **re-initialised** (outputs to 0, then
-//!   all pins outputs) and given the fingers it should hold now;
-//! - [`ResilientBoards::release_all`] writes 0 to every board, lost or not, for stopping.
+//!   1 s of performance time); when it answers it is **re-initialised** (a PCA9555: outputs to
+//!   0, then all pins outputs; a PCA9685: every channel off, its prescale, awake) and given
+//!   the fingers (or duties) it should hold now;
+//! - [`ResilientBoards::release_all`] turns every output of every board off, lost or not, for
+//!   stopping.
 //!
 //! [`BoardsOut`] is a whole robot on such boards ([`LocalRobot`]: orch-core's interpreter and
 //! guard) behind [`MidiOut`], so the performer drives it beside the virtual robot; its guard
@@ -20,8 +23,8 @@
 use std::time::Duration;
 
 use embedded_hal::i2c::I2c;
-use orch_boards::FingerBoardSet;
-use orch_core::{BoardId, Config, FingerBoards, Instant};
+use orch_boards::MixedBoardSet;
+use orch_core::{on_off, BoardId, BoardKind, Config, Duty, FingerBoards, Instant};
 use orch_perform::{Boards, LocalRobot, MidiOut, MAX_BOARDS};
 
 use crate::OutError;
@@ -105,39 +108,82 @@ struct Lost {
     backoff_us: u64,
 }
 
+/// The PCA9685's oscillator start-up at initialisation: a real wait.
+struct Sleep;
+
+impl embedded_hal::delay::DelayNs for Sleep {
+    fn delay_ns(&mut self, ns: u32) {
+        std::thread::sleep(Duration::from_nanos(ns.into()));
+    }
+}
+
 /// Finger boards that survive a bad bus. See the [module notes](self).
 #[derive(Debug)]
 pub struct ResilientBoards<I2C> {
-    set: FingerBoardSet<I2C, MAX_BOARDS>,
+    set: MixedBoardSet<I2C, MAX_BOARDS>,
     lost: Vec<Option<Lost>>,
-    wanted: Vec<u16>,
+    /// What each board should hold: its 16 duties (an on/off board's are full or off).
+    wanted: Vec<[Duty; 16]>,
+    /// The PCA9685 boards' PWM frequency, Hz.
+    pwm_hz: u32,
     now_us: u64,
     stats: BoardStats,
 }
 
+/// `outputs` as duties: a set bit fully on.
+fn full_or_off(outputs: u16) -> [Duty; 16] {
+    core::array::from_fn(|n| {
+        if outputs & (1 << n) != 0 {
+            Duty::FULL
+        } else {
+            Duty::OFF
+        }
+    })
+}
+
 impl<I2C: TimedBus> ResilientBoards<I2C> {
-    /// Boards at these 7-bit addresses on `bus`, each initialised now; a board that does not
-    /// answer is lost from the start (and tried again later). An error only when there are
-    /// more than [`MAX_BOARDS`] or none answers.
+    /// PCA9555 boards at these 7-bit addresses on `bus`: [`with_kinds`](Self::with_kinds)
+    /// with every board on/off.
     pub fn new(bus: I2C, addresses: &[u8]) -> Result<Self, OutError> {
-        let set = FingerBoardSet::with_boards(bus, addresses).ok_or(OutError::TooManyBoards {
-            boards: addresses.len(),
+        let boards: Vec<(u8, BoardKind)> =
+            addresses.iter().map(|&a| (a, BoardKind::OnOff)).collect();
+        Self::with_kinds(bus, &boards, orch_boards::pca9685::DEFAULT_FREQUENCY_HZ)
+    }
+
+    /// Boards at these 7-bit addresses on `bus`, each of its kind (PCA9685 boards at `pwm_hz`),
+    /// each initialised now; a board that does not answer is lost from the start (and tried
+    /// again later). An error when there are more than [`MAX_BOARDS`], `pwm_hz` is one a
+    /// PCA9685 cannot make, or none answers.
+    pub fn with_kinds(bus: I2C, boards: &[(u8, BoardKind)], pwm_hz: u32) -> Result<Self, OutError> {
+        if boards.iter().any(|b| b.1 == BoardKind::Pwm)
+            && orch_boards::pca9685::Prescale::from_hz(pwm_hz).is_none()
+        {
+            return Err(OutError::Board(format!(
+                "a PCA9685 cannot make {pwm_hz} Hz (24..=1526 Hz)"
+            )));
+        }
+        let set = MixedBoardSet::with_boards(bus, boards).ok_or(OutError::TooManyBoards {
+            boards: boards.len(),
         })?;
-        let n = addresses.len();
+        let n = boards.len();
         let mut me = Self {
             set,
             lost: vec![None; n],
-            wanted: vec![0; n],
+            wanted: vec![[Duty::OFF; 16]; n],
+            pwm_hz,
             now_us: 0,
             stats: BoardStats::default(),
         };
         for i in 0..n {
-            if me.try_hard(i, |set| set.init_board(i as u8)).is_err() {
+            if me
+                .try_hard(i, |set| set.init_board(i as u8, pwm_hz, &mut Sleep))
+                .is_err()
+            {
                 me.lose(i);
             }
         }
         if n > 0 && me.lost.iter().all(Option::is_some) {
-            let list: Vec<String> = addresses.iter().map(|a| format!("{a:#04x}")).collect();
+            let list: Vec<String> = boards.iter().map(|b| format!("{:#04x}", b.0)).collect();
             return Err(OutError::NoBoard {
                 addresses: list.join(", "),
             });
@@ -161,12 +207,12 @@ impl<I2C: TimedBus> ResilientBoards<I2C> {
     }
 
     /// The driver and its bus.
-    pub fn set(&self) -> &FingerBoardSet<I2C, MAX_BOARDS> {
+    pub fn set(&self) -> &MixedBoardSet<I2C, MAX_BOARDS> {
         &self.set
     }
 
     /// The driver and its bus, to change (a test's fault injection).
-    pub fn set_mut(&mut self) -> &mut FingerBoardSet<I2C, MAX_BOARDS> {
+    pub fn set_mut(&mut self) -> &mut MixedBoardSet<I2C, MAX_BOARDS> {
         &mut self.set
     }
 
@@ -177,18 +223,20 @@ impl<I2C: TimedBus> ResilientBoards<I2C> {
         }
     }
 
-    /// Writes 0 to every board, whatever the cache says and whether lost or not (each tried
-    /// as a write is). For stopping: every finger up.
+    /// Turns every output of every board off, whatever the cache says and whether lost or not
+    /// (each tried as a write is). For stopping: every finger up.
     pub fn release_all(&mut self) {
         self.set.invalidate();
         for i in 0..self.wanted.len() {
-            self.wanted[i] = 0;
+            self.wanted[i] = [Duty::OFF; 16];
             let address = self.set.addresses()[i];
             let id = BoardId {
                 index: i as u8,
                 address,
             };
-            if self.try_hard(i, |set| set.write_board(id, 0)).is_err() && self.lost[i].is_none() {
+            let off = [Duty::OFF; 16];
+            if self.try_hard(i, |set| set.write_duties(id, &off)).is_err() && self.lost[i].is_none()
+            {
                 self.lose(i);
             }
         }
@@ -200,7 +248,7 @@ impl<I2C: TimedBus> ResilientBoards<I2C> {
         &mut self,
         _i: usize,
         mut f: impl FnMut(
-            &mut FingerBoardSet<I2C, MAX_BOARDS>,
+            &mut MixedBoardSet<I2C, MAX_BOARDS>,
         ) -> Result<(), orch_boards::Error<I2C::Error>>,
     ) -> Result<(), orch_boards::Error<I2C::Error>> {
         let mut pause = Duration::from_micros(100);
@@ -250,10 +298,14 @@ impl<I2C: TimedBus> ResilientBoards<I2C> {
             index: i as u8,
             address,
         };
-        let back = self.set.init_board(i as u8).and_then(|()| {
-            self.set.invalidate();
-            self.set.write_board(id, wanted)
-        });
+        let pwm_hz = self.pwm_hz;
+        let back = self
+            .set
+            .init_board(i as u8, pwm_hz, &mut Sleep)
+            .and_then(|()| {
+                self.set.invalidate();
+                self.set.write_duties(id, &wanted)
+            });
         match back {
             Ok(()) => {
                 self.lost[i] = None;
@@ -278,21 +330,31 @@ impl<I2C: TimedBus> ResilientBoards<I2C> {
 impl<I2C: TimedBus> FingerBoards for ResilientBoards<I2C> {
     type Error = orch_boards::Error<I2C::Error>;
 
+    /// Writes one board's on/off outputs: [`write_duties`](FingerBoards::write_duties) with a
+    /// set bit fully on.
+    fn write_board(&mut self, board: BoardId, outputs: u16) -> Result<(), Self::Error> {
+        self.write_duties(board, &full_or_off(outputs))
+    }
+
     /// Writes one board, trying again on a bus error; a board that is lost (or becomes lost
     /// now) keeps what it should hold for its return, and the write counts as done, so that
     /// the other boards are written. Only the driver's own errors (a layout that does not
-    /// match the boards) come back.
-    fn write_board(&mut self, board: BoardId, outputs: u16) -> Result<(), Self::Error> {
+    /// match the boards) come back. A PCA9555 gets the outputs whose duty is above 0.
+    fn write_duties(&mut self, board: BoardId, duties: &[Duty; 16]) -> Result<(), Self::Error> {
         let i = usize::from(board.index);
         if i >= self.wanted.len() {
             return Err(orch_boards::Error::UnknownBoard(board.index));
         }
-        self.wanted[i] = outputs;
+        self.wanted[i] = if self.set.kinds()[i] == BoardKind::Pwm {
+            *duties
+        } else {
+            full_or_off(on_off(duties))
+        };
         if self.lost[i].is_some() {
             self.try_return(i);
             return Ok(());
         }
-        match self.try_hard(i, |set| set.write_board(board, outputs)) {
+        match self.try_hard(i, |set| set.write_duties(board, duties)) {
             Ok(()) => Ok(()),
             Err(e) if e.i2c().is_none() => Err(e),
             Err(_) => {
@@ -310,15 +372,6 @@ impl<I2C: TimedBus> Boards for ResilientBoards<I2C> {
     }
 }
 
-/// The refusal of a robot with PCA9685 boards on a Linux I2C bus.
-pub(crate) fn pwm_unsupported() -> OutError {
-    OutError::Board(
-        "PCA9685 (PWM) boards on a Linux I2C bus are not driven yet: i2c outputs drive \
-         PCA9555/TCA9555 boards (the virtual robot and orch interpret play PCA9685 ones)"
-            .into(),
-    )
-}
-
 /// A robot on finger boards driven from this host, as a [`MidiOut`]. See the
 /// [module notes](self).
 #[derive(Debug)]
@@ -332,17 +385,35 @@ pub struct BoardsOut<I2C: TimedBus> {
 }
 
 impl<I2C: TimedBus> BoardsOut<I2C> {
-    /// A robot for `config` on `bus`, its boards at the addresses `config`'s layout names.
+    /// A robot for `config` on `bus`, its boards PCA9555s at the addresses `config`'s layout
+    /// names ([`with_kinds`](Self::with_kinds) with every board on/off).
     pub fn new(config: Config<MAX_BOARDS>, bus: I2C) -> Result<Self, OutError> {
-        if !config.dynamics.is_on_off() {
-            return Err(pwm_unsupported());
-        }
+        Self::with_kinds(config, &[], orch_boards::pca9685::DEFAULT_FREQUENCY_HZ, bus)
+    }
+
+    /// A robot for `config` on `bus`, its boards at the addresses `config`'s layout names,
+    /// each of the kind `kinds` gives (on/off past its end), PCA9685 boards at `pwm_hz`.
+    pub fn with_kinds(
+        config: Config<MAX_BOARDS>,
+        kinds: &[BoardKind],
+        pwm_hz: u32,
+        bus: I2C,
+    ) -> Result<Self, OutError> {
         // Board i of the layout is board i of the set: every board up to the last one with
         // keys (the layout's unused room after it has none).
         let boards = &config.layout.boards;
         let n = boards.iter().rposition(|b| b.keys > 0).map_or(0, |i| i + 1);
-        let addresses: Vec<u8> = boards[..n].iter().map(|b| b.address).collect();
-        let boards = ResilientBoards::new(bus, &addresses)?;
+        let boards: Vec<(u8, BoardKind)> = boards[..n]
+            .iter()
+            .enumerate()
+            .map(|(i, b)| (b.address, kinds.get(i).copied().unwrap_or_default()))
+            .collect();
+        if !config.dynamics.is_on_off() && !boards.iter().any(|b| b.1 == BoardKind::Pwm) {
+            return Err(OutError::Board(
+                "the robot plays dynamics but none of its boards is a PCA9685".into(),
+            ));
+        }
+        let boards = ResilientBoards::with_kinds(bus, &boards, pwm_hz)?;
         let robot = LocalRobot::new(config, boards).map_err(|e| OutError::Board(e.to_string()))?;
         Ok(Self {
             robot,

@@ -145,11 +145,14 @@ pub enum Output {
 }
 
 impl Output {
-    /// Opens `target` for a robot configured as `config` (the boards' addresses, for I2C).
-    /// `None` for [`Target::Sim`].
+    /// Opens `target` for a robot configured as `config` (for I2C: the boards' addresses,
+    /// each board's kind in `kinds` (on/off past its end) and the PCA9685s' `pwm_hz`). `None`
+    /// for [`Target::Sim`].
     pub fn open(
         target: &Target,
         config: &orch_core::Config<MAX_BOARDS>,
+        kinds: &[orch_core::BoardKind],
+        pwm_hz: u32,
     ) -> Result<Option<Output>, OutError> {
         let path = |p: &std::path::Path| p.to_string_lossy().into_owned();
         Ok(Some(match target {
@@ -159,10 +162,12 @@ impl Output {
             Target::Udp(a) => Output::Udp(UdpOut::open(a)?),
             #[cfg(feature = "alsa")]
             Target::Alsa(a) => Output::Alsa(alsa_seq::AlsaOut::open(a)?),
-            Target::I2c(_) if !config.dynamics.is_on_off() => {
-                return Err(boards::pwm_unsupported());
-            }
-            Target::I2c(p) => Output::I2c(Box::new(BoardsOut::new(*config, open_i2c(&path(p))?)?)),
+            Target::I2c(p) => Output::I2c(Box::new(BoardsOut::with_kinds(
+                *config,
+                kinds,
+                pwm_hz,
+                open_i2c(&path(p))?,
+            )?)),
         }))
     }
 
