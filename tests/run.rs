@@ -513,6 +513,58 @@ fn stdin_end_releases_and_exits_0() {
     assert_eq!((ws[2].address, ws[2].byte, ws[2].outputs), (0x22, None, 0));
 }
 
+/// A robot of PCA9685 boards: a Note-On is written as its strike's duty, the hold follows by
+/// itself 40 ms later (a timer, no byte), and the end of the input lets every channel go.
+#[test]
+fn on_pca9685_boards_a_note_strikes_holds_on_its_own_and_releases_at_the_end() {
+    let dir = std::env::temp_dir().join(format!("orch-run-pwm-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let robot = dir.join("robot.toml");
+    let config = Command::new(ORCH)
+        .args(["config", "--boards", "pca9685"])
+        .output()
+        .unwrap();
+    std::fs::write(&robot, &config.stdout).unwrap();
+    let mut child = run_orch(
+        &["--in", "-", "--json", "--robot", robot.to_str().unwrap()],
+        Stdio::piped(),
+    );
+    let mut stdin = child.stdin.take().unwrap();
+    let (lines, reader) = collect_lines(child.stdout.take().unwrap());
+    stdin.write_all(&[0x90, 60, 127]).unwrap();
+    let t0 = Instant::now();
+    // The strike, then the hold by the timer.
+    while lines.lock().unwrap().len() < 2 {
+        assert!(t0.elapsed() < Duration::from_secs(10), "no strike and hold");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    drop(stdin);
+    let status = wait_exit(&mut child, Duration::from_secs(5));
+    reader.join().unwrap();
+    assert!(status.success());
+    let v: Vec<Value> = lines.lock().unwrap().iter().map(|l| l.1.clone()).collect();
+    let duty = |l: &Value| l["duty"][8].as_u64().unwrap();
+    // Middle C: board 1 (0x41), channel 8.
+    assert_eq!(
+        (v[0]["address"].as_u64(), duty(&v[0])),
+        (Some(0x41), 4095),
+        "{v:?}"
+    );
+    assert!(v[0]["byte"].is_u64());
+    assert_eq!(duty(&v[1]), 1433, "the 35 % hold: {v:?}");
+    assert!(v[1]["byte"].is_null(), "written by the timer");
+    let strike_to_hold = v[1]["t_us"].as_u64().unwrap() - v[0]["t_us"].as_u64().unwrap();
+    assert_eq!(strike_to_hold, 40_000, "{v:?}");
+    assert_eq!(duty(&v[2]), 0, "released at the end: {v:?}");
+    let fin = v.last().unwrap();
+    assert_eq!(fin["type"], "final");
+    assert!(fin["boards"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|b| b["outputs"] == 0));
+}
+
 /// No byte for the watchdog's time while a key is down: released by the timer alone, with
 /// `orch run` still reading (4 s by default; 300 ms after an Active Sensing byte).
 #[test]
