@@ -24,18 +24,23 @@ impl Song {
     /// the *i*-th span is the *i*-th of the [`Song::notes`] Note-Ons), each with the time of
     /// the Note-Off that ends it.
     ///
-    /// A Note-Off (0x8n, or 0x9n with velocity 0) ends the oldest note still sounding on its
-    /// channel and note number (first on, first off); a Note-Off with no note to end is
-    /// ignored. All Notes Off and sustain are not counted: the span is the written note.
+    /// One note at a time on a channel and note number, as orch-core's interpreter reads a
+    /// stream: a Note-Off (0x8n, or 0x9n with velocity 0) ends the note that is on; a Note-On
+    /// of a note already on (no Note-Off between) ends it there and begins the next (the
+    /// interpreter re-strikes the key); a Note-Off with no note on is ignored. So a file whose
+    /// Note-Offs do not match its Note-Ons (a Note-Off written before its Note-On at the same
+    /// tick) still gives each note its own length, not one running to the next note's end.
+    /// All Notes Off and sustain are not counted: the span is the written note.
     pub fn note_spans(&self) -> Vec<NoteSpan> {
         let mut spans: Vec<NoteSpan> = Vec::with_capacity(self.notes());
-        // Per (channel, note): the spans still open, oldest first.
-        let mut open: Vec<std::collections::VecDeque<usize>> =
-            vec![std::collections::VecDeque::new(); 16 * 128];
+        // Per (channel, note): the span that is on.
+        let mut open: Vec<Option<usize>> = vec![None; 16 * 128];
         for e in self.events() {
             if let Some((ch, note, velocity)) = e.bytes.note_on() {
                 let slot = usize::from(ch) * 128 + usize::from(note & 0x7F);
-                open[slot].push_back(spans.len());
+                if let Some(i) = open[slot].replace(spans.len()) {
+                    spans[i].off_us = e.time_us;
+                }
                 spans.push(NoteSpan {
                     channel: ch,
                     note,
@@ -45,7 +50,7 @@ impl Song {
                 });
             } else if let Some((ch, note)) = e.bytes.note_off() {
                 let slot = usize::from(ch) * 128 + usize::from(note & 0x7F);
-                if let Some(i) = open[slot].pop_front() {
+                if let Some(i) = open[slot].take() {
                     spans[i].off_us = e.time_us;
                 }
             }
@@ -111,8 +116,10 @@ mod tests {
     }
 
     #[test]
-    fn note_spans_overlapping_same_note_first_on_first_off() {
-        // Two Cs on one channel overlap: the first Note-Off ends the first.
+    fn note_spans_a_note_on_again_ends_the_note_that_is_on() {
+        // Two Cs on one channel with no Note-Off between: the second ends the first (the
+        // interpreter re-strikes), the first Note-Off ends the second, the extra one is
+        // ignored.
         let song = Song::parse(&smf(&[
             (0, &[0x90, 60, 100]),
             (240, &[0x90, 60, 90]),
@@ -126,7 +133,37 @@ mod tests {
                 .iter()
                 .map(|s| (s.on_us, s.off_us))
                 .collect::<Vec<_>>(),
-            [(0, 500_000), (250_000, 1_000_000)]
+            [(0, 250_000), (250_000, 500_000)]
+        );
+    }
+
+    #[test]
+    fn note_spans_a_note_off_written_before_its_note_on_does_not_shift_later_notes() {
+        // As in a corpus file: at one tick, two Note-Offs and then a Note-On whose own
+        // Note-Off was written first. The notes after it keep their own lengths.
+        let song = Song::parse(&smf(&[
+            (0, &[0x90, 60, 100]),
+            (480, &[0x80, 60, 0]),
+            (0, &[0x80, 60, 0]),
+            (0, &[0x90, 60, 100]),
+            (480, &[0x90, 60, 100]),
+            (240, &[0x80, 60, 0]),
+            (240, &[0x90, 60, 100]),
+            (240, &[0x80, 60, 0]),
+        ]))
+        .unwrap();
+        let spans = song.note_spans();
+        assert_eq!(
+            spans
+                .iter()
+                .map(|s| (s.on_us, s.off_us))
+                .collect::<Vec<_>>(),
+            [
+                (0, 500_000),
+                (500_000, 1_000_000),
+                (1_000_000, 1_250_000),
+                (1_500_000, 1_750_000)
+            ]
         );
     }
 
