@@ -6,7 +6,7 @@ use crate::model::{Outcome, Roll};
 use crate::svg::{a, num, Writer};
 
 /// Height of the title and legend, px.
-pub const HEIGHT: f64 = 62.0;
+pub const HEIGHT: f64 = 78.0;
 /// The narrowest drawing that holds the legend, px.
 pub const MIN_WIDTH: f64 = 900.0;
 
@@ -112,12 +112,6 @@ pub fn legend(w: &mut Writer, roll: &Roll) {
         y,
         &format!("the robot's keys {}–{}", note_name(lo), note_name(hi)),
     ) + 14.0;
-    x = label(
-        w,
-        x,
-        y,
-        "outline: the score's note, Note-On to Note-Off · fill: the robot's strike, sounded to key up · hover a note for its account",
-    ) + 14.0;
     if roll.dynamics {
         for (i, v) in [1u8, 64, 127].into_iter().enumerate() {
             let op = 0.2 + 0.8 * f64::from(v) / 127.0;
@@ -135,5 +129,11 @@ pub fn legend(w: &mut Writer, roll: &Roll) {
         }
         label(w, x + 34.0, y, "fill opacity: loudness, velocity 1 → 127");
     }
+    label(
+        w,
+        8.0,
+        y + 17.0,
+        "outline: the score's note, Note-On to Note-Off · fill: the robot's strike, sounded to key up · hover a note for its account",
+    );
     w.close("g");
 }
