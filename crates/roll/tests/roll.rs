@@ -314,3 +314,23 @@ fn a_performance_that_kept_no_sounds_is_refused() {
         Err(orch_roll::build::BuildError::NoSounds)
     );
 }
+
+#[test]
+fn at_twice_the_tempo_notes_and_bar_lines_come_twice_as_soon() {
+    let (song, robot) = common::dynamics_song();
+    let keys = (36, 96);
+    let normal = common::play(&song, &robot);
+    let fast = common::play_at(&song, &robot, orch_perform::Tempo::new(2.0).unwrap());
+    let a = orch_roll::build::roll(&song, &normal, keys, 1.0, "x").unwrap();
+    let b = orch_roll::build::roll(&song, &fast, keys, 2.0, "x").unwrap();
+    assert_eq!(a.notes.len(), b.notes.len());
+    for (x, y) in a.notes.iter().zip(&b.notes) {
+        assert!((x.t_ms / 2.0 - y.t_ms).abs() < 0.01, "{x:?} {y:?}");
+        assert!((x.end_ms / 2.0 - y.end_ms).abs() < 0.01, "{x:?} {y:?}");
+        // Bars and beats are the song's own.
+        assert_eq!((x.bar, x.beat), (y.bar, y.beat));
+    }
+    let bars = |r: &orch_roll::Roll| r.bars.iter().map(|b| (b.bar, b.t_ms)).collect::<Vec<_>>();
+    assert_eq!(bars(&a), [(1, 0.0), (2, 1500.0), (3, 3000.0)]);
+    assert_eq!(bars(&b), [(1, 0.0), (2, 750.0), (3, 1500.0)]);
+}

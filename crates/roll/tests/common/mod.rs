@@ -92,6 +92,11 @@ pub fn dynamics_song() -> (Song, Robot) {
 
 /// `song` performed on `robot` on the virtual clock, every sound kept.
 pub fn play(song: &Song, robot: &Robot) -> Played {
+    play_at(song, robot, Tempo::NORMAL)
+}
+
+/// [`play`] at `tempo`.
+pub fn play_at(song: &Song, robot: &Robot, tempo: Tempo) -> Played {
     let setup = Setup {
         config: robot.config,
         sim: orch_sim::SimConfig {
@@ -99,7 +104,7 @@ pub fn play(song: &Song, robot: &Robot) -> Played {
             ..robot.sim_config()
         },
         compensation: true,
-        tempo: Tempo::NORMAL,
+        tempo,
         link: Link::Direct,
     };
     perform::<_, MidiRecording>(
