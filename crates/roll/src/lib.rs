@@ -49,9 +49,14 @@
 //!
 //! ## Why SVG is written directly
 //!
-//! The drawing needs six kinds of element; [`svg`]'s writer is 100 lines with its escaping
-//! tested, gives byte-stable output for golden files, and adds no dependency to keep up.
-//! The `svg` crate (0.17) would build the same tree with more allocation and no gain here.
+//! The drawing needs seven kinds of element (`svg`, `g`, `rect`, `line`, `path`, `circle`,
+//! `text`/`title`); [`svg`]'s writer streams them into one string in about 100 lines, its
+//! escaping tested, numbers to a fixed tenth, attributes in the order written (class and
+//! `data-` first, where a reader looks), so golden files stay byte-stable and readable, and
+//! there is no dependency to keep up. The `svg` crate (0.17, well kept) builds a tree of
+//! boxed nodes with attributes in a hash map, sorted by name on output, and writes numbers
+//! as `f64`'s `Display` gives them: the rounding would be ours anyway, for a tree we do not
+//! need.
 //!
 //! ```
 //! use orch_roll::{render, BarLine, Options, Outcome, Roll, RollNote, Strike};
