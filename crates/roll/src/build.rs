@@ -22,6 +22,9 @@ pub enum BuildError {
     NoSounds,
     /// A line of the account names an outcome the roll does not know.
     UnknownOutcome(&'static str),
+    /// The performance's notes are not the song's Note-Ons, one for one (it played only
+    /// some of them: a robot given some channels), so a note's Note-Off is not known.
+    NotTheSong,
 }
 
 impl fmt::Display for BuildError {
@@ -36,6 +39,10 @@ impl fmt::Display for BuildError {
                 "the virtual robot kept no sound events (Keep::Everything is needed for the key-ups)"
             ),
             Self::UnknownOutcome(o) => write!(f, "unknown outcome {o:?} in the account"),
+            Self::NotTheSong => write!(
+                f,
+                "the performance did not play the song's notes one for one (some channels only?)"
+            ),
         }
     }
 }
@@ -64,6 +71,14 @@ pub fn roll(
     let wall_ms = |us: u64| us as f64 / tempo / 1000.0;
     let start = played.start_us as i64;
     let spans = song.note_spans();
+    if spans.len() != played.records.len()
+        || spans
+            .iter()
+            .zip(&played.records)
+            .any(|(s, r)| (s.channel, s.note) != (r.channel, r.note))
+    {
+        return Err(BuildError::NotTheSong);
+    }
     let keyups = KeyUps::of(played);
     let lines =
         played.account_indexed(|t_ms| song.bar_beat((t_ms * 1000.0 * tempo).round() as u64));
@@ -72,9 +87,7 @@ pub fn roll(
     for (i, line) in lines {
         let outcome = Outcome::from_account(line.outcome, line.reason)
             .ok_or(BuildError::UnknownOutcome(line.outcome))?;
-        let length_ms = spans
-            .get(i)
-            .map_or(0.0, |s| wall_ms(s.off_us.saturating_sub(s.on_us)));
+        let length_ms = wall_ms(spans[i].off_us.saturating_sub(spans[i].on_us));
         let strike = match (line.sounded_ms, line.onset_ms, line.key) {
             (Some(_), Some(_), Some(_)) if !key_ups => return Err(BuildError::NoSounds),
             (Some(sounded_ms), Some(onset_ms), Some(key)) => {

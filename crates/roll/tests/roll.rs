@@ -334,3 +334,74 @@ fn at_twice_the_tempo_notes_and_bar_lines_come_twice_as_soon() {
     assert_eq!(bars(&a), [(1, 0.0), (2, 1500.0), (3, 3000.0)]);
     assert_eq!(bars(&b), [(1, 0.0), (2, 750.0), (3, 1500.0)]);
 }
+
+#[test]
+fn a_performance_of_only_some_of_the_songs_notes_is_refused() {
+    // Channel 1's notes only, as a robot given `ch=1` plays them: the records are not the
+    // song's Note-Ons one for one, so their Note-Offs cannot be found by place.
+    let (song, robot) = common::outcomes_song();
+    let events: Vec<_> = orch_perform::song_events(&song)
+        .filter(|e| e.bytes.channel() == Some(0))
+        .collect();
+    let notes = events
+        .iter()
+        .filter(|e| e.bytes.note_on().is_some())
+        .count();
+    let setup = orch_perform::Setup {
+        config: robot.config,
+        sim: orch_sim::SimConfig {
+            keep: orch_sim::Keep::Everything,
+            ..robot.sim_config()
+        },
+        compensation: true,
+        tempo: orch_perform::Tempo::NORMAL,
+        link: orch_perform::Link::Direct,
+    };
+    let played = orch_perform::perform::<_, orch_perform::MidiRecording>(
+        &setup,
+        events.into_iter(),
+        notes,
+        None,
+        &mut orch_seq::VirtualClock::new(),
+        None,
+        None,
+    )
+    .unwrap();
+    assert_eq!(
+        orch_roll::build::roll(&song, &played, (36, 96), 1.0, "x"),
+        Err(orch_roll::build::BuildError::NotTheSong)
+    );
+}
+
+#[test]
+fn a_performance_that_jumped_is_refused() {
+    // From bar 2, as `orch play --from 2` plays: performance time no longer follows the bars.
+    let (song, robot) = common::outcomes_song();
+    let control = orch_perform::Control::new();
+    control.jump_to(song.bar_start_us(2).unwrap());
+    let setup = orch_perform::Setup {
+        config: robot.config,
+        sim: orch_sim::SimConfig {
+            keep: orch_sim::Keep::Everything,
+            ..robot.sim_config()
+        },
+        compensation: true,
+        tempo: orch_perform::Tempo::NORMAL,
+        link: orch_perform::Link::Direct,
+    };
+    let played = orch_perform::perform::<_, orch_perform::MidiRecording>(
+        &setup,
+        orch_perform::song_events(&song),
+        song.notes(),
+        None,
+        &mut orch_seq::VirtualClock::new(),
+        Some(&control),
+        None,
+    )
+    .unwrap();
+    assert!(played.jumps > 0);
+    assert_eq!(
+        orch_roll::build::roll(&song, &played, (36, 96), 1.0, "x"),
+        Err(orch_roll::build::BuildError::Jumped)
+    );
+}
