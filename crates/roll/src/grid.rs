@@ -21,6 +21,20 @@ pub fn rows(w: &mut Writer, roll: &Roll, l: &Layout) {
             ],
         );
         lanes(w, roll, l, row);
+        // When the row begins, m:ss, in the margin above the note names.
+        let s = (row.from_ms / 1000.0).floor().max(0.0) as u64;
+        w.text(
+            "text",
+            &[
+                a("class", "time"),
+                a("x", num(LEFT - 7.0)),
+                a("y", num(row.top - 4.0)),
+                a("text-anchor", "end"),
+                a("font-size", "9"),
+                a("fill", "#777777"),
+            ],
+            &format!("{}:{:02}", s / 60, s % 60),
+        );
         bars(w, &roll.bars, l, row, i, step);
         w.close("g");
     }
