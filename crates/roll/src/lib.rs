@@ -19,6 +19,7 @@
 //!   into rows of at most [`Options::max_row_px`] (1 600 px, 20 s), each ending at a bar line
 //!   where one fits, like the systems of a score: the drawing's width stays bounded however
 //!   long the piece, and its height grows by a row (about 420 px for 61 keys) every 20 s.
+//!   Each row says when it begins (m:ss).
 //! - **Bar lines** with their numbers (every bar, or every 2, 4, 5, 10… when bars are narrow,
 //!   and always a row's first).
 //! - **Notes**: the score's note as an outline at the pitch written, from its score time to
@@ -43,7 +44,7 @@
 //! (struck); inside it, `rect.score` (the outline, one a row it crosses), `rect.strike`
 //! (the fill), `line.fold`, and `.mark`. Rows are `g.row` (`data-row`, `data-from-ms`,
 //! `data-to-ms`), bar lines `g.bar` (`data-bar`), the key range `rect.keys` (`data-low`,
-//! `data-high`: MIDI notes), the legend's entries `g.legend-item` (`data-outcome`,
+//! `data-high`: MIDI notes), the rows' start times `text.time`, the legend's entries `g.legend-item` (`data-outcome`,
 //! `data-count`). Colours are presentation attributes, so the file looks the same with no
 //! style sheet (a viewer, `rsvg-convert`); a page may restyle by class.
 //!
