@@ -141,6 +141,10 @@ pub struct AnalyzeArgs {
     /// file, in score order (see the README's `--notes`).
     #[arg(long, value_name = "FILE")]
     pub notes: Option<PathBuf>,
+    /// Write a piano roll of the performance to FILE as SVG: the score's notes as outlines,
+    /// the robot's strikes as fills, coloured by outcome (see the README's `--svg`).
+    #[arg(long, value_name = "FILE")]
+    pub svg: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]

@@ -19,6 +19,7 @@ pub mod input;
 pub mod interpret;
 pub mod play;
 pub mod robot;
+pub mod roll;
 pub mod run;
 pub mod show;
 pub mod view;

@@ -852,8 +852,17 @@ struct Analysis<'a> {
 pub fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
     let song = load_song(&args.file)?;
     let robot = load_robot(args.robot.as_deref())?;
-    let setup = setup(&robot, true, tempo(args.tempo)?);
+    let mut setup = setup(&robot, true, tempo(args.tempo)?);
+    let svg_file = create(&args.svg, "--svg")?;
+    if svg_file.is_some() {
+        // The roll draws each strike to its key-up: the sound events are kept too.
+        setup.sim.keep = orch_sim::Keep::Everything;
+    }
     let played = render(&song, &setup)?;
+    if let (Some(mut file), Some(path)) = (svg_file, &args.svg) {
+        crate::roll::write(&mut file, &args.file, &song, &robot, &played, setup.tempo)
+            .with_context(|| format!("--svg {}", path.display()))?;
+    }
     let report = played.report(uncompensated(&song, &setup)?);
     let wrong = went_wrong(&song, &played, setup.tempo);
     if let Some(mut file) = create(&args.notes, "--notes")? {

@@ -564,6 +564,80 @@ fn the_note_by_note_account_has_every_note_in_score_order_and_the_reports_counts
     }
 }
 
+/// `orch analyze --svg`: a piano roll with one note element for every note, by outcome as
+/// the report counts them, a dropped note's reason on it; an unwritable path exits 2.
+#[test]
+fn analyze_svg_draws_every_note_with_the_reports_outcomes() {
+    let dir = std::env::temp_dir().join(format!("orch-svg-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let pwm = dir.join("pwm.toml");
+    let out = orch()
+        .args(["config", "--boards", "pca9685"])
+        .output()
+        .unwrap();
+    std::fs::write(&pwm, &out.stdout).unwrap();
+    for (file, robot) in [
+        ("mma-aria-girl.mid", None),
+        ("bach-bwv66-6-chorale.mid", Some(&pwm)),
+    ] {
+        let svg = dir.join("roll.svg");
+        let mut cmd = orch();
+        cmd.arg("analyze");
+        if let Some(r) = robot {
+            cmd.arg("--robot").arg(r);
+        }
+        let out = cmd
+            .arg("--json")
+            .arg("--svg")
+            .arg(&svg)
+            .arg(corpus(file))
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{file}");
+        let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+        let text = std::fs::read_to_string(&svg).unwrap();
+        assert!(text.starts_with("<?xml"), "{file}");
+        assert!(text.trim_end().ends_with("</svg>"), "{file}");
+        let notes: Vec<&str> = text
+            .lines()
+            .filter(|l| l.starts_with("<g class=\"note "))
+            .collect();
+        assert_eq!(
+            notes.len() as u64,
+            report["notes"].as_u64().unwrap(),
+            "{file}"
+        );
+        let count = |attr: &str| notes.iter().filter(|l| l.contains(attr)).count() as u64;
+        let o = &report["outcomes"];
+        for name in ["on_time", "late", "early", "unison", "joined", "skipped"] {
+            assert_eq!(
+                count(&format!("data-outcome=\"{name}\"")),
+                o[name].as_u64().unwrap(),
+                "{file}: {name}"
+            );
+        }
+        for (reason, n) in o["dropped"].as_object().unwrap() {
+            assert_eq!(
+                count(&format!("data-reason=\"{reason}\"")),
+                n.as_u64().unwrap(),
+                "{file}: {reason}"
+            );
+        }
+        assert_eq!(
+            text.contains("fill opacity: loudness"),
+            robot.is_some(),
+            "{file}: loudness drawn only on PWM boards"
+        );
+    }
+    let out = orch()
+        .args(["analyze", "--svg", "/nonexistent-dir/roll.svg"])
+        .arg(corpus("bach-bwv66-6-chorale.mid"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--svg"));
+}
+
 fn corpus(name: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../shared/midi")

@@ -68,6 +68,16 @@ impl Played {
     /// time in ms from the start of the performance (the front end knows the song and the
     /// tempo it was played at).
     pub fn account(&self, bar_beat: impl Fn(f64) -> (u32, u32)) -> Vec<NoteLine> {
+        self.account_indexed(bar_beat)
+            .into_iter()
+            .map(|(_, l)| l)
+            .collect()
+    }
+
+    /// The [`account`](Self::account), each line with the index of its record in
+    /// [`records`](Self::records) (for a score's note, its place among the song's Note-Ons:
+    /// what ties a line to its note's Note-Off, for a piano roll).
+    pub fn account_indexed(&self, bar_beat: impl Fn(f64) -> (u32, u32)) -> Vec<(usize, NoteLine)> {
         let start = self.start_us as i64;
         let mut lines: Vec<(i64, usize, NoteLine)> = self
             .records
@@ -78,7 +88,7 @@ impl Played {
         // Score order: by time, and in the file's order at the same time (a record's index is
         // its note's place among the Note-Ons).
         lines.sort_by_key(|(t, i, _)| (*t, *i));
-        lines.into_iter().map(|(_, _, l)| l).collect()
+        lines.into_iter().map(|(_, i, l)| (i, l)).collect()
     }
 
     fn line(&self, r: &NoteRecord, start: i64, bar_beat: &impl Fn(f64) -> (u32, u32)) -> NoteLine {

@@ -40,6 +40,7 @@ mod clock;
 mod error;
 mod smf;
 mod song;
+mod spans;
 mod stream;
 
 pub use bell::Bell;
@@ -47,4 +48,5 @@ pub use clock::{Clock, Lateness, RealClock, VirtualClock};
 pub use error::SeqError;
 pub use midly;
 pub use song::{Event, Song, TempoChange, TimeSignature, WireBytes, DEFAULT_TEMPO};
+pub use spans::NoteSpan;
 pub use stream::{wire, RunningStatus, Wire};

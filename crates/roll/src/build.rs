@@ -1,0 +1,189 @@
+//! A [`Roll`] from a song and its performance on the virtual robot: the note-by-note account
+//! ([`Played::account_indexed`]), each note's Note-Off ([`Song::note_spans`]), each strike's
+//! sound and key-up (the virtual robot's presses and sound events), the bar lines
+//! ([`Song::bar_start_us`]).
+
+use std::fmt;
+
+use orch_perform::Played;
+use orch_seq::Song;
+use orch_sim::SoundKind;
+
+use crate::model::{BarLine, Outcome, Roll, RollNote, Strike};
+
+/// Why a performance cannot be drawn.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum BuildError {
+    /// It jumped (a bar skipped or played again): performance time no longer follows the
+    /// score's bars.
+    Jumped,
+    /// The virtual robot kept no sound events (`orch_sim::Keep::Presses`), so a strike's
+    /// key-up is not known: perform with `Keep::Everything`.
+    NoSounds,
+    /// A line of the account names an outcome the roll does not know.
+    UnknownOutcome(&'static str),
+    /// The performance's notes are not the song's Note-Ons, one for one (it played only
+    /// some of them: a robot given some channels), so a note's Note-Off is not known.
+    NotTheSong,
+}
+
+impl fmt::Display for BuildError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Jumped => write!(
+                f,
+                "the performance jumped: a roll is drawn from a performance played straight through"
+            ),
+            Self::NoSounds => write!(
+                f,
+                "the virtual robot kept no sound events (Keep::Everything is needed for the key-ups)"
+            ),
+            Self::UnknownOutcome(o) => write!(f, "unknown outcome {o:?} in the account"),
+            Self::NotTheSong => write!(
+                f,
+                "the performance did not play the song's notes one for one (some channels only?)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for BuildError {}
+
+/// The roll of `played`, a performance of `song` at tempo factor `tempo` (2: twice as
+/// fast) on a robot whose keys are the MIDI notes `keys.0..=keys.1`, titled `title`.
+pub fn roll(
+    song: &Song,
+    played: &Played,
+    keys: (u8, u8),
+    tempo: f64,
+    title: &str,
+) -> Result<Roll, BuildError> {
+    if played.jumps > 0 || played.replayed > 0 {
+        return Err(BuildError::Jumped);
+    }
+    let key_ups = played
+        .performance
+        .sounds
+        .iter()
+        .any(|e| e.kind == SoundKind::Up);
+    let tempo = if tempo > 0.0 { tempo } else { 1.0 };
+    // Song µs to performance ms.
+    let wall_ms = |us: u64| us as f64 / tempo / 1000.0;
+    let start = played.start_us as i64;
+    let spans = song.note_spans();
+    if spans.len() != played.records.len()
+        || spans
+            .iter()
+            .zip(&played.records)
+            .any(|(s, r)| (s.channel, s.note) != (r.channel, r.note))
+    {
+        return Err(BuildError::NotTheSong);
+    }
+    let keyups = KeyUps::of(played);
+    let lines =
+        played.account_indexed(|t_ms| song.bar_beat((t_ms * 1000.0 * tempo).round() as u64));
+    let mut notes = Vec::with_capacity(lines.len());
+    let mut end_ms = wall_ms(song.duration_us());
+    for (i, line) in lines {
+        let outcome = Outcome::from_account(line.outcome, line.reason)
+            .ok_or(BuildError::UnknownOutcome(line.outcome))?;
+        let length_ms = wall_ms(spans[i].off_us.saturating_sub(spans[i].on_us));
+        let strike = match (line.sounded_ms, line.onset_ms, line.key) {
+            (Some(_), Some(_), Some(_)) if !key_ups => return Err(BuildError::NoSounds),
+            (Some(sounded_ms), Some(onset_ms), Some(key)) => {
+                let sounded_us = (sounded_ms * 1000.0).round() as i64 + start;
+                let up_us = keyups.after(key, sounded_us);
+                let up_ms = ((up_us - start) as f64 / 1000.0).max(sounded_ms);
+                end_ms = end_ms.max(up_ms);
+                Some(Strike {
+                    sounded_ms,
+                    up_ms,
+                    onset_ms,
+                    velocity: line.sounded_velocity,
+                })
+            }
+            _ => None,
+        };
+        notes.push(RollNote {
+            t_ms: line.t_ms,
+            end_ms: line.t_ms + length_ms,
+            bar: line.bar,
+            beat: line.beat,
+            note: line.note,
+            channel: line.channel,
+            velocity: line.velocity,
+            landed: line.key.map(|k| keys.0.saturating_add(k)),
+            outcome,
+            strike,
+        });
+    }
+    // The drawing runs on to the line that closes the last bar.
+    let last_bar = song.bar_beat(song.duration_us().saturating_sub(1)).0;
+    if let Some(close) = song.bar_start_us(last_bar.saturating_add(1)) {
+        end_ms = end_ms.max(wall_ms(close));
+    }
+    let bars = (1..=last_bar.saturating_add(1))
+        .filter_map(|b| {
+            song.bar_start_us(b).map(|us| BarLine {
+                bar: b,
+                t_ms: wall_ms(us),
+            })
+        })
+        .filter(|b| b.t_ms <= end_ms)
+        .collect();
+    Ok(Roll {
+        title: title.to_string(),
+        notes,
+        bars,
+        end_ms,
+        keys,
+        dynamics: played.dynamic_keys.iter().any(|d| *d),
+    })
+}
+
+/// Each key's key-up times, µs, ascending, and when its strikes sounded.
+struct KeyUps {
+    ups: Vec<Vec<i64>>,
+    downs: Vec<Vec<i64>>,
+    end: i64,
+}
+
+impl KeyUps {
+    fn of(played: &Played) -> Self {
+        let perf = &played.performance;
+        let keys = perf
+            .sounds
+            .iter()
+            .map(|e| usize::from(e.key) + 1)
+            .max()
+            .unwrap_or(0);
+        let mut ups = vec![Vec::new(); keys];
+        let mut downs = vec![Vec::new(); keys];
+        for e in &perf.sounds {
+            let t = (e.time.as_nanos() / 1000) as i64;
+            match e.kind {
+                SoundKind::Up => ups[usize::from(e.key)].push(t),
+                SoundKind::Down => downs[usize::from(e.key)].push(t),
+            }
+        }
+        for v in ups.iter_mut().chain(downs.iter_mut()) {
+            v.sort_unstable();
+        }
+        Self {
+            ups,
+            downs,
+            end: (perf.summary.end.as_nanos() / 1000) as i64,
+        }
+    }
+
+    /// When `key`, sounded at `sounded_us`, was fully up again: its next key-up, or the next
+    /// key-down if that comes first (a re-press before it was up), or the end.
+    fn after(&self, key: u8, sounded_us: i64) -> i64 {
+        let k = usize::from(key);
+        let next = |v: Option<&Vec<i64>>| {
+            v.and_then(|v| v.get(v.partition_point(|t| *t <= sounded_us)).copied())
+        };
+        let up = next(self.ups.get(k)).unwrap_or(self.end);
+        next(self.downs.get(k)).map_or(up, |d| up.min(d))
+    }
+}
