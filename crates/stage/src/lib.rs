@@ -12,8 +12,14 @@
 //!   ([`sources::follow`]: each cue to the follower, its answer to the performance's
 //!   `Control`), with what the conductor did ([`sources::Status`]).
 //!
-//! Errors are [`SourceError`]: bad input (a source that cannot be opened, named) or the I/O
-//! failure behind it.
+//! - [`live`]: the live interpreter loop ([`LiveRobot`]): live MIDI bytes in, orch-core's
+//!   interpreter and guard, finger boards out (the virtual robot, or boards on a Linux I2C
+//!   bus), the stream passed on ([`thru`], re-framed by [`framer`]), a robot read again
+//!   swapped in when every key is up; every board write shown to whoever watches
+//!   ([`BoardWrite`]).
+//!
+//! Errors are [`SourceError`] (a tempo source: bad input, named, or the I/O failure behind
+//! it) and [`LiveError`] (the live loop).
 //!
 //! ## Cargo features
 //!
@@ -21,7 +27,12 @@
 //!   own `camera` feature (building it needs libclang). Without it a camera source is refused,
 //!   saying how to build with it.
 
+pub mod framer;
+pub mod live;
 pub mod sources;
+pub mod thru;
+
+pub use live::{BoardWrite, LiveBoards, LiveRobot, ReloadRefused, Totals};
 
 /// Why a live session's part could not start.
 #[derive(Debug)]
@@ -53,5 +64,51 @@ impl std::error::Error for SourceError {
             SourceError::Io { source, .. } => Some(source),
             SourceError::BadInput(_) => None,
         }
+    }
+}
+
+/// What stops a live robot, or keeps it from starting.
+#[derive(Debug)]
+pub enum LiveError {
+    /// Bad input from the user, said in words (the front end's bad-input exit): an output
+    /// that cannot be used this way.
+    BadInput(String),
+    /// The robot's configuration cannot run.
+    Robot(orch_robot::RobotError),
+    /// An output could not be opened.
+    Output(orch_io::OutError),
+    /// Something failed while running: a board write, a thru output.
+    Failed(String),
+}
+
+impl std::fmt::Display for LiveError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LiveError::BadInput(m) | LiveError::Failed(m) => f.write_str(m),
+            LiveError::Robot(e) => write!(f, "{e}"),
+            LiveError::Output(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for LiveError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            LiveError::Robot(e) => Some(e),
+            LiveError::Output(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+impl From<orch_robot::RobotError> for LiveError {
+    fn from(e: orch_robot::RobotError) -> Self {
+        LiveError::Robot(e)
+    }
+}
+
+impl From<orch_io::OutError> for LiveError {
+    fn from(e: orch_io::OutError) -> Self {
+        LiveError::Output(e)
     }
 }
