@@ -1,0 +1,244 @@
+//! Key events to samples, every strike on its own sample.
+//!
+//! rustysynth (like FluidSynth and every block synthesizer) takes a Note-On at the start of
+//! its next block: with its 64-sample default a strike would land up to 1.45 ms late at
+//! 44.1 kHz, by an amount that depends on where the block boundaries fall. Its blocks are at
+//! least [`BLOCK`] (8) samples long, so a smaller block cannot help. Instead, [`PHASES`]
+//! synthesizers run side by side on the same soundfont, synthesizer `p`'s blocks starting on
+//! the samples `s` with `s % 8 == p`; a strike on sample `s` goes to synthesizer `s % 8`, at
+//! the very start of one of its blocks, so its first sample is sample `s` exactly. Their
+//! outputs are summed (the synthesis is linear: a voice sounds the same whichever
+//! synthesizer plays it). A key's release goes to the synthesizer holding its voice, and
+//! takes effect at that synthesizer's next block boundary: up to 7 samples (0.16 ms at
+//! 44.1 kHz) after the key's return, where the key's own release lasts tens of ms. A strike
+//! on a key still sounding releases the sound it had (one string per key).
+//!
+//! The sound is dry: no reverberation or chorus (the synthesizer's effects are off), so a
+//! silence between notes is digital silence once the notes' releases have died away, and
+//! the eight synthesizers cost no more than one voice for voice. Rendering is streamed in
+//! chunks of [`CHUNK`] samples, so memory follows the notes sounding, not the length of the
+//! piece; it ends when every voice has died away after the last event (at most
+//! [`MAX_TAIL_S`] later).
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+
+use rustysynth::{SoundFont, Synthesizer, SynthesizerSettings};
+
+use crate::error::RenderError;
+use crate::events::{Action, KeyEvent};
+
+/// rustysynth's smallest block, samples: the synthesizers' block here.
+pub const BLOCK: usize = 8;
+/// Synthesizers side by side, one for each sample position in a block.
+pub const PHASES: usize = BLOCK;
+/// Samples rendered at a time.
+pub const CHUNK: usize = 4096;
+/// The longest a render goes on after its last event, seconds (a sound still ringing then
+/// is cut).
+pub const MAX_TAIL_S: u32 = 30;
+/// Voices each synthesizer may play at once (rustysynth's most): tails of released notes
+/// are never stolen by new strikes in any file a robot can play.
+const POLYPHONY: usize = 256;
+/// The General MIDI program every key plays: 0, Acoustic Grand Piano.
+const PROGRAM: i32 = 0;
+/// The synthesizer velocity loudness 1 plays at. See [`synth_velocity`].
+pub const SOFTEST_VELOCITY: u8 = 16;
+
+/// The synthesizer's velocity for a loudness on the MIDI velocity scale (1..=127).
+///
+/// rustysynth's gain goes with the square of velocity, (v/127)²: −84 dB at 1, and a voice
+/// under −60 dB is never started, so velocities below about 4 (more with a soundfont's own
+/// attenuation) make no sound at all. On the robot, loudness 1 is a key's softest sound, a
+/// sound all the same. So loudness 1..=127 plays linearly as velocity
+/// [`SOFTEST_VELOCITY`]..=127 (16: −36 dB, about a piano's range from its softest to its
+/// loudest), for the robot and the score alike.
+pub fn synth_velocity(loudness: u8) -> u8 {
+    let l = u32::from(loudness.clamp(1, 127));
+    let span = 127 - u32::from(SOFTEST_VELOCITY);
+    (u32::from(SOFTEST_VELOCITY) + ((l - 1) * span + 63) / 126) as u8
+}
+
+/// How to render.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// Samples a second (16 000..=192 000).
+    pub sample_rate: u32,
+    /// The synthesizers' master volume (rustysynth's default is 0.5).
+    pub gain: f32,
+}
+
+impl Default for Settings {
+    /// 44 100 Hz, gain 0.5.
+    fn default() -> Self {
+        Self {
+            sample_rate: 44_100,
+            gain: 0.5,
+        }
+    }
+}
+
+/// What a render gave.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Rendered {
+    /// Samples a channel written (frames).
+    pub frames: u64,
+    /// Strikes played.
+    pub strikes: u64,
+    /// The largest sample magnitude, 1.0 = full scale.
+    pub peak: f32,
+    /// Samples whose magnitude passed full scale (each channel counted).
+    pub over: u64,
+}
+
+enum Cmd {
+    On(u8, u8),
+    Off(u8),
+}
+
+/// One synthesizer, its blocks starting on the samples `phase + 8k`, and what it is to do
+/// when (in its own samples: its sample `j` is the song's sample `j + phase`).
+struct Lane {
+    synth: Synthesizer,
+    phase: u64,
+    /// Its own samples rendered so far.
+    pos: u64,
+    queue: VecDeque<(u64, Cmd)>,
+    left: Vec<f32>,
+    right: Vec<f32>,
+}
+
+/// Renders `events` (in time order) with `font`, handing each chunk of samples (left,
+/// right) to `sink` in order.
+pub fn render(
+    font: &Arc<SoundFont>,
+    events: &[KeyEvent],
+    settings: &Settings,
+    mut sink: impl FnMut(&[f32], &[f32]) -> Result<(), RenderError>,
+) -> Result<Rendered, RenderError> {
+    let rate = settings.sample_rate;
+    let mut s = SynthesizerSettings::new(rate as i32);
+    s.block_size = BLOCK;
+    s.maximum_polyphony = POLYPHONY;
+    s.enable_reverb_and_chorus = false;
+    let mut lanes = Vec::with_capacity(PHASES);
+    for phase in 0..PHASES as u64 {
+        let mut synth =
+            Synthesizer::new(font, &s).map_err(|e| RenderError::Synth(e.to_string()))?;
+        synth.set_master_volume(settings.gain);
+        synth.process_midi_message(0, 0xC0, PROGRAM, 0);
+        lanes.push(Lane {
+            synth,
+            phase,
+            pos: 0,
+            queue: VecDeque::new(),
+            left: vec![0.0; CHUNK],
+            right: vec![0.0; CHUNK],
+        });
+    }
+    // Who holds each note's voice, and each lane's commands in its own samples.
+    let mut holder: [Option<usize>; 128] = [None; 128];
+    let mut order: Vec<(u64, usize)> = events
+        .iter()
+        .enumerate()
+        .map(|(i, e)| (e.sample(rate), i))
+        .collect();
+    order.sort_unstable();
+    let mut out = Rendered::default();
+    let mut last = 0u64;
+    for &(at, i) in &order {
+        let e = &events[i];
+        let n = usize::from(e.note & 0x7F);
+        last = at;
+        if let Some(q) = holder[n].take() {
+            lanes[q].queue.push_back((at - q as u64, Cmd::Off(e.note)));
+        }
+        if let Action::Strike { velocity } = e.action {
+            let p = (at % PHASES as u64) as usize;
+            lanes[p]
+                .queue
+                .push_back((at - p as u64, Cmd::On(e.note, synth_velocity(velocity))));
+            holder[n] = Some(p);
+            out.strikes += 1;
+        }
+    }
+    let end_cap = last + u64::from(MAX_TAIL_S) * u64::from(rate);
+    let (mut left, mut right) = (vec![0f32; CHUNK], vec![0f32; CHUNK]);
+    let mut c = 0u64;
+    loop {
+        let n = CHUNK.min((end_cap - c) as usize);
+        left[..n].fill(0.0);
+        right[..n].fill(0.0);
+        for lane in &mut lanes {
+            lane.fill(c, n, &mut left, &mut right);
+        }
+        let silent = left[..n].iter().chain(&right[..n]).all(|&x| x == 0.0);
+        if c > last && silent {
+            break;
+        }
+        for &x in left[..n].iter().chain(&right[..n]) {
+            out.peak = out.peak.max(x.abs());
+            out.over += u64::from(x.abs() > 1.0);
+        }
+        sink(&left[..n], &right[..n])?;
+        out.frames += n as u64;
+        c += n as u64;
+        if c >= end_cap {
+            break;
+        }
+    }
+    Ok(out)
+}
+
+impl Lane {
+    /// Adds this lane's sound for the song's samples `c..c + n` into `left` and `right`.
+    fn fill(&mut self, c: u64, n: usize, left: &mut [f32], right: &mut [f32]) {
+        let end = c + n as u64; // the song's samples
+        if end <= self.phase {
+            return;
+        }
+        let until = end - self.phase; // its own
+        while self.pos < until {
+            let next = match self.queue.front() {
+                Some(&(t, _)) if t <= self.pos => {
+                    let (_, cmd) = self.queue.pop_front().expect("front");
+                    match cmd {
+                        Cmd::On(note, v) => self.synth.note_on(0, note.into(), v.into()),
+                        Cmd::Off(note) => self.synth.note_off(0, note.into()),
+                    }
+                    continue;
+                }
+                Some(&(t, _)) => t.min(until),
+                None => until,
+            };
+            let len = (next - self.pos) as usize;
+            // Where its own sample `pos` falls in the chunk.
+            let at = (self.pos + self.phase - c) as usize;
+            let (l, r) = (&mut self.left[..len], &mut self.right[..len]);
+            self.synth.render(l, r);
+            for (d, s) in left[at..at + len].iter_mut().zip(l.iter()) {
+                *d += *s;
+            }
+            for (d, s) in right[at..at + len].iter_mut().zip(r.iter()) {
+                *d += *s;
+            }
+            self.pos = next;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_loudness_has_a_velocity_that_sounds_and_louder_is_louder() {
+        assert_eq!(synth_velocity(1), SOFTEST_VELOCITY);
+        assert_eq!(synth_velocity(127), 127);
+        assert_eq!(synth_velocity(0), SOFTEST_VELOCITY);
+        for l in 2..=127u8 {
+            assert!(synth_velocity(l) >= synth_velocity(l - 1), "{l}");
+        }
+        assert!(synth_velocity(64) > synth_velocity(20));
+    }
+}

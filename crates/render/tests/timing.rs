@@ -1,0 +1,151 @@
+//! The render against the virtual robot: each strike found in the audio on the sample the
+//! virtual robot says it sounded (within 1), a dropped note silent where it would have been.
+//! The strikes are found by `orch_render::onset` in the samples, and the robot's times are
+//! read from its note-by-note account, not from the renderer.
+
+mod support;
+
+use orch_perform::{perform, song_events, Link, MidiRecording, Played, Setup, Tempo};
+use orch_render::{events, onset, synth, Settings};
+use orch_seq::{Song, VirtualClock};
+
+const RATE: u32 = 44_100;
+
+/// A format-0 file, 480 ticks a quarter at 120 bpm (1 ms = 0.96 tick): `(ms, note, velocity,
+/// length ms)`, in time order.
+fn smf(notes: &[(u32, u8, u8, u32)]) -> Song {
+    let mut ev: Vec<(u32, [u8; 3])> = Vec::new();
+    for &(at, n, v, len) in notes {
+        ev.push((at, [0x90, n, v]));
+        ev.push((at + len, [0x80, n, 0]));
+    }
+    ev.sort_by_key(|e| e.0);
+    let mut track = Vec::new();
+    let mut last = 0u32;
+    for (ms, bytes) in ev {
+        let tick = ms * 96 / 100;
+        let mut d = tick - last;
+        last = tick;
+        let mut var = vec![(d & 0x7F) as u8];
+        d >>= 7;
+        while d > 0 {
+            var.insert(0, 0x80 | (d & 0x7F) as u8);
+            d >>= 7;
+        }
+        track.extend_from_slice(&var);
+        track.extend_from_slice(&bytes);
+    }
+    track.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
+    let mut b = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
+    b.extend_from_slice(&(track.len() as u32).to_be_bytes());
+    b.extend_from_slice(&track);
+    Song::parse(&b).unwrap()
+}
+
+fn play(song: &Song, config: orch_core::Config<{ orch_perform::MAX_BOARDS }>) -> Played {
+    let setup = Setup {
+        config,
+        sim: orch_sim::SimConfig {
+            keep: orch_sim::Keep::Everything,
+            ..orch_sim::SimConfig::thesis()
+        },
+        compensation: true,
+        tempo: Tempo::NORMAL,
+        link: Link::Direct,
+    };
+    perform::<_, MidiRecording>(
+        &setup,
+        song_events(song),
+        song.notes(),
+        None,
+        &mut VirtualClock::new(),
+        None,
+        None,
+    )
+    .unwrap()
+}
+
+/// The render of `played` with the test font, both channels.
+fn render(played: &Played) -> (Vec<f32>, Vec<f32>) {
+    let keys = events::from_performance(&played.performance, played.start_us, 36).unwrap();
+    let font = support::square_font(RATE);
+    let (mut l, mut r) = (Vec::new(), Vec::new());
+    synth::render(&font, &keys, &Settings::default(), |a, b| {
+        l.extend_from_slice(a);
+        r.extend_from_slice(b);
+        Ok(())
+    })
+    .unwrap();
+    (l, r)
+}
+
+/// The sample each sounded note's strike should begin on, by the account, in score order.
+fn sounded_samples(played: &Played) -> Vec<i64> {
+    played
+        .account(|_| (1, 1))
+        .iter()
+        .filter_map(|n| n.sounded_ms)
+        .map(|ms| (ms * f64::from(RATE) / 1000.0).round() as i64)
+        .collect()
+}
+
+#[test]
+fn every_strike_lands_within_one_sample_of_the_virtual_robots_time() {
+    // Single notes with silence between, across the keys, at times that fall on every
+    // sample position of the synthesizer's blocks (odd numbers of ms and of µs of delay).
+    let notes: Vec<(u32, u8, u8, u32)> = (0..24u32)
+        .map(|i| {
+            (
+                300 + i * 700 + (i * 37) % 11,
+                36 + (i as u8 * 5) % 61,
+                100,
+                120,
+            )
+        })
+        .collect();
+    let song = smf(&notes);
+    let played = play(&song, orch_perform::thesis_config());
+    let want = sounded_samples(&played);
+    assert_eq!(want.len(), notes.len(), "every note sounds on the robot");
+    let (l, r) = render(&played);
+    let found = onset::onsets(&l, &r, 1e-5, RATE as usize / 20);
+    assert_eq!(found.len(), want.len(), "one onset a strike: {found:?}");
+    let mut phases = [false; synth::PHASES];
+    for (f, w) in found.iter().zip(&want) {
+        assert!(
+            (*f as i64 - w).abs() <= 1,
+            "onset at sample {f}, the robot's strike at {w}"
+        );
+        phases[(*w as usize) % synth::PHASES] = true;
+    }
+    assert!(
+        phases.iter().filter(|p| **p).count() >= 6,
+        "the strikes fall on most positions in a block: {phases:?}"
+    );
+}
+
+#[test]
+fn a_dropped_note_is_silent_where_it_would_have_been() {
+    // Note 20 is below the thesis's keys: dropped, not folded.
+    let song = smf(&[
+        (500, 60, 100, 200),
+        (2000, 20, 100, 200),
+        (3500, 72, 100, 200),
+    ]);
+    let mut config = orch_perform::thesis_config();
+    config.out_of_range = orch_core::OutOfRange::Drop;
+    let played = play(&song, config);
+    let report = played.report(None);
+    assert_eq!(report.outcomes.dropped.range, 1);
+    let (l, r) = render(&played);
+    let found = onset::onsets(&l, &r, 1e-5, RATE as usize / 20);
+    assert_eq!(found.len(), 2, "{found:?}");
+    let at = |ms: usize| ms * RATE as usize / 1000;
+    assert_eq!(
+        onset::rms(&l, &r, at(1900), at(2600)),
+        0.0,
+        "silence at 2 s"
+    );
+    assert!(onset::rms(&l, &r, at(500), at(700)) > 0.01);
+    assert!(onset::rms(&l, &r, at(3500), at(3700)) > 0.01);
+}
