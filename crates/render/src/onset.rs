@@ -4,11 +4,13 @@
 //! The method is made for what a dry render of a sparse score gives: notes with silence
 //! between them. An **onset** is the first sample whose magnitude (the larger of the two
 //! channels) exceeds `threshold` after at least `min_gap` samples at or below it (the start of
-//! the audio counts as silence). A dry render's silence is digital silence once a note's
-//! release has died away, and a note's first sample is already well above −100 dBFS
-//! (a piano sample starts at its attack), so `threshold` = 10⁻⁵ (−100 dBFS) finds the
-//! sample a strike begins on. Not a detector for recordings (noise, reverberation, a
-//! neighbour still ringing): that is `orch calibrate`'s work, with spectral flux.
+//! the audio counts as silence). A dry render's silence is digital silence (exact zeros) once
+//! a note's release has died away, and the renderer starts each voice so that its first
+//! sample that is not zero is the strike's (see [`crate::synth`]): with `threshold` = 0.0,
+//! the onset is the strike's sample. A higher threshold finds a later sample, by how slowly
+//! the soundfont's attack rises (up to tens of samples at −100 dBFS on TimGM6mb's pianos).
+//! Not a detector for recordings (noise, reverberation, a neighbour still ringing): that is
+//! `orch calibrate`'s work, with spectral flux.
 
 /// Onsets in `left`/`right`: see the [module notes](self). Sample indices.
 pub fn onsets(left: &[f32], right: &[f32], threshold: f32, min_gap: usize) -> Vec<usize> {

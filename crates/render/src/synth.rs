@@ -1,23 +1,37 @@
-//! Key events to samples, every strike on its own sample.
+//! Key events to samples, every strike sounding from its own sample.
 //!
-//! rustysynth (like FluidSynth and every block synthesizer) takes a Note-On at the start of
-//! its next block: with its 64-sample default a strike would land up to 1.45 ms late at
-//! 44.1 kHz, by an amount that depends on where the block boundaries fall. Its blocks are at
-//! least [`BLOCK`] (8) samples long, so a smaller block cannot help. Instead, [`PHASES`]
-//! synthesizers run side by side on the same soundfont, synthesizer `p`'s blocks starting on
-//! the samples `s` with `s % 8 == p`; a strike on sample `s` goes to synthesizer `s % 8`, at
-//! the very start of one of its blocks, so its first sample is sample `s` exactly. Their
-//! outputs are summed (the synthesis is linear: a voice sounds the same whichever
-//! synthesizer plays it). A key's release goes to the synthesizer holding its voice, and
-//! takes effect at that synthesizer's next block boundary: up to 7 samples (0.16 ms at
-//! 44.1 kHz) after the key's return, where the key's own release lasts tens of ms. A strike
-//! on a key still sounding releases the sound it had (one string per key).
+//! **Exact starts.** rustysynth (like FluidSynth and every block synthesizer) takes a
+//! Note-On at the start of its next block: with its 64-sample default a strike would land up
+//! to 1.45 ms late at 44.1 kHz, by an amount that depends on where the block boundaries fall.
+//! Its blocks are at least [`BLOCK`] (8) samples long, so a smaller block cannot help.
+//! Instead, [`PHASES`] synthesizers run side by side on the same soundfont, synthesizer `p`'s
+//! blocks starting on the samples `s` with `s % 8 == p`; a voice that must start on sample
+//! `s` goes to synthesizer `s % 8`, at the very start of one of its blocks, so its first
+//! sample is sample `s`. Their outputs are summed (the synthesis is linear: a voice sounds the
+//! same whichever synthesizer plays it, and each voice's envelope is stepped at the same
+//! offsets from its own start).
 //!
-//! The sound is dry: no reverberation or chorus (the synthesizer's effects are off), so a
-//! silence between notes is digital silence once the notes' releases have died away, and
-//! the eight synthesizers cost no more than one voice for voice. Rendering is streamed in
-//! chunks of [`CHUNK`] samples, so memory follows the notes sounding, not the length of the
-//! piece; it ends when every voice has died away after the last event (at most
+//! **The soundfont's lead.** A voice is silent for a while after it starts: rustysynth
+//! applies the SoundFont default volume-envelope delay of −12 000 timecents literally (1 ms:
+//! 41 samples at 44.1 kHz), and a font's samples may begin with silence (TimGM6mb's pianos:
+//! up to 7.3 ms). Each note's lead at each velocity played is measured once (the note alone
+//! from silence, on the render's own settings: the first sample that is not digital silence)
+//! and the voice is started that much earlier, so that **its first sound is on the sample of
+//! the strike**. A strike in the first `lead` samples of the song starts at sample 0 (late by
+//! the rest of its lead). Leads longer than [`MAX_LEAD_MS`] are not looked for.
+//!
+//! **Releases.** A key's release goes to the synthesizer holding its voice, at the key-up's
+//! sample, and takes effect at that synthesizer's next block boundary: up to 7 samples
+//! (0.16 ms at 44.1 kHz) after the key's return, where the key's own release lasts tens of
+//! ms. A strike on a key still sounding ends the sound it had where the new one begins (one
+//! string per key). Successive strikes of a key take turns over 15 MIDI channels (all
+//! playing the piano), so that one strike's release never touches another's voice.
+//!
+//! **Dry.** No reverberation or chorus (the synthesizer's effects are off): a silence between
+//! notes is digital silence once the notes' releases have died away (rustysynth ends a voice
+//! under −60 dB), and eight synthesizers cost no more than one, voice for voice. Rendering is
+//! streamed in chunks of [`CHUNK`] samples, so memory follows the notes sounding, not the
+//! length of the piece; it ends when every voice has died away after the last event (at most
 //! [`MAX_TAIL_S`] later).
 
 use std::collections::VecDeque;
@@ -89,11 +103,15 @@ pub struct Rendered {
     pub peak: f32,
     /// Samples whose magnitude passed full scale (each channel counted).
     pub over: u64,
+    /// The longest lead taken off a strike, samples (see [`render`]).
+    pub lead_max: u64,
 }
 
 enum Cmd {
-    On(u8, u8),
-    Off(u8),
+    /// Channel, note, velocity.
+    On(u8, u8, u8),
+    /// Channel, note.
+    Off(u8, u8),
 }
 
 /// One synthesizer, its blocks starting on the samples `phase + 8k`, and what it is to do
@@ -108,6 +126,83 @@ struct Lane {
     right: Vec<f32>,
 }
 
+/// The MIDI channels voices are spread over, every one playing [`PROGRAM`]: successive
+/// strikes of one key take turns, so releasing one strike's voice never touches another's
+/// (channel 10, index 9, is the drums' in General MIDI: not used).
+const CHANNELS: [u8; 15] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 12, 13, 14, 15];
+
+/// The synthesizer settings every render and lead measurement uses.
+fn synth_settings(rate: u32, polyphony: usize) -> SynthesizerSettings {
+    let mut s = SynthesizerSettings::new(rate as i32);
+    s.block_size = BLOCK;
+    s.maximum_polyphony = polyphony;
+    s.enable_reverb_and_chorus = false;
+    s
+}
+
+fn synthesizer(
+    font: &Arc<SoundFont>,
+    s: &SynthesizerSettings,
+    gain: f32,
+) -> Result<Synthesizer, RenderError> {
+    let mut synth = Synthesizer::new(font, s).map_err(|e| RenderError::Synth(e.to_string()))?;
+    synth.set_master_volume(gain);
+    for ch in CHANNELS {
+        synth.process_midi_message(ch.into(), 0xC0, PROGRAM, 0);
+    }
+    Ok(synth)
+}
+
+/// Each note's **lead** in this soundfont: the samples from a voice's start to its first
+/// sample that is not silent (the soundfont's volume-envelope delay, which the SF2 default of
+/// −12 000 timecents makes about 1 ms, and any silence at the head of its sample). Measured
+/// once for each note and velocity a render plays, by playing it alone from silence on the
+/// render's own settings, and taken off the strike's start, so that the sound begins on the
+/// strike's sample. At most [`MAX_LEAD_MS`]; a note silent that long counts no lead.
+struct Leads {
+    font: Arc<SoundFont>,
+    settings: SynthesizerSettings,
+    gain: f32,
+    max: usize,
+    known: std::collections::HashMap<(u8, u8), u64>,
+}
+
+/// The longest lead looked for, ms.
+pub const MAX_LEAD_MS: u32 = 100;
+
+impl Leads {
+    fn new(font: &Arc<SoundFont>, rate: u32, gain: f32) -> Self {
+        Self {
+            font: Arc::clone(font),
+            settings: synth_settings(rate, 8),
+            gain,
+            max: (rate * MAX_LEAD_MS / 1000) as usize,
+            known: std::collections::HashMap::new(),
+        }
+    }
+
+    fn of(&mut self, note: u8, velocity: u8) -> Result<u64, RenderError> {
+        if let Some(&lead) = self.known.get(&(note, velocity)) {
+            return Ok(lead);
+        }
+        let mut synth = synthesizer(&self.font, &self.settings, self.gain)?;
+        synth.note_on(0, note.into(), velocity.into());
+        let (mut l, mut r) = ([0f32; 64], [0f32; 64]);
+        let mut lead = 0;
+        let mut seen = 0;
+        while seen < self.max {
+            synth.render(&mut l, &mut r);
+            if let Some(k) = l.iter().zip(&r).position(|(a, b)| *a != 0.0 || *b != 0.0) {
+                lead = (seen + k) as u64;
+                break;
+            }
+            seen += l.len();
+        }
+        self.known.insert((note, velocity), lead);
+        Ok(lead)
+    }
+}
+
 /// Renders `events` (in time order) with `font`, handing each chunk of samples (left,
 /// right) to `sink` in order.
 pub fn render(
@@ -117,18 +212,11 @@ pub fn render(
     mut sink: impl FnMut(&[f32], &[f32]) -> Result<(), RenderError>,
 ) -> Result<Rendered, RenderError> {
     let rate = settings.sample_rate;
-    let mut s = SynthesizerSettings::new(rate as i32);
-    s.block_size = BLOCK;
-    s.maximum_polyphony = POLYPHONY;
-    s.enable_reverb_and_chorus = false;
+    let s = synth_settings(rate, POLYPHONY);
     let mut lanes = Vec::with_capacity(PHASES);
     for phase in 0..PHASES as u64 {
-        let mut synth =
-            Synthesizer::new(font, &s).map_err(|e| RenderError::Synth(e.to_string()))?;
-        synth.set_master_volume(settings.gain);
-        synth.process_midi_message(0, 0xC0, PROGRAM, 0);
         lanes.push(Lane {
-            synth,
+            synth: synthesizer(font, &s, settings.gain)?,
             phase,
             pos: 0,
             queue: VecDeque::new(),
@@ -136,31 +224,53 @@ pub fn render(
             right: vec![0.0; CHUNK],
         });
     }
-    // Who holds each note's voice, and each lane's commands in its own samples.
-    let mut holder: [Option<usize>; 128] = [None; 128];
+    let mut leads = Leads::new(font, rate, settings.gain);
+    // The events in time order; who holds each note's voice (its lane, channel and start);
+    // each lane's commands in its own samples, sorted by time below (a strike starts early by
+    // its lead, so a lane's commands do not come in the events' order).
     let mut order: Vec<(u64, usize)> = events
         .iter()
         .enumerate()
         .map(|(i, e)| (e.sample(rate), i))
         .collect();
     order.sort_unstable();
+    let mut holder: [Option<(usize, u8, u64)>; 128] = [None; 128];
+    let mut turn = [0usize; 128];
+    let mut cmds: Vec<Vec<(u64, Cmd)>> = (0..PHASES).map(|_| Vec::new()).collect();
     let mut out = Rendered::default();
     let mut last = 0u64;
     for &(at, i) in &order {
         let e = &events[i];
-        let n = usize::from(e.note & 0x7F);
-        last = at;
-        if let Some(q) = holder[n].take() {
-            lanes[q].queue.push_back((at - q as u64, Cmd::Off(e.note)));
+        let note = e.note & 0x7F;
+        let n = usize::from(note);
+        let start = match e.action {
+            Action::Strike { velocity } => {
+                let v = synth_velocity(velocity);
+                let lead = leads.of(note, v)?;
+                out.lead_max = out.lead_max.max(lead);
+                Some((at.saturating_sub(lead), v))
+            }
+            Action::Release => None,
+        };
+        // The sound this key had ends at its key-up, or where a new strike begins.
+        if let Some((q, ch, began)) = holder[n].take() {
+            let off = start.map_or(at, |(s, _)| s).max(began);
+            cmds[q].push((off - q as u64, Cmd::Off(ch, note)));
+            last = last.max(off);
         }
-        if let Action::Strike { velocity } = e.action {
-            let p = (at % PHASES as u64) as usize;
-            lanes[p]
-                .queue
-                .push_back((at - p as u64, Cmd::On(e.note, synth_velocity(velocity))));
-            holder[n] = Some(p);
+        if let Some((begin, v)) = start {
+            let p = (begin % PHASES as u64) as usize;
+            let ch = CHANNELS[turn[n] % CHANNELS.len()];
+            turn[n] += 1;
+            cmds[p].push((begin - p as u64, Cmd::On(ch, note, v)));
+            holder[n] = Some((p, ch, begin));
             out.strikes += 1;
         }
+        last = last.max(at);
+    }
+    for (lane, mut c) in lanes.iter_mut().zip(cmds) {
+        c.sort_by_key(|&(t, _)| t);
+        lane.queue = c.into();
     }
     let end_cap = last + u64::from(MAX_TAIL_S) * u64::from(rate);
     let (mut left, mut right) = (vec![0f32; CHUNK], vec![0f32; CHUNK]);
@@ -203,8 +313,10 @@ impl Lane {
                 Some(&(t, _)) if t <= self.pos => {
                     let (_, cmd) = self.queue.pop_front().expect("front");
                     match cmd {
-                        Cmd::On(note, v) => self.synth.note_on(0, note.into(), v.into()),
-                        Cmd::Off(note) => self.synth.note_off(0, note.into()),
+                        Cmd::On(ch, note, v) => {
+                            self.synth.note_on(ch.into(), note.into(), v.into())
+                        }
+                        Cmd::Off(ch, note) => self.synth.note_off(ch.into(), note.into()),
                     }
                     continue;
                 }

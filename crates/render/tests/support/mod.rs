@@ -35,6 +35,16 @@ fn name20(name: &str) -> Vec<u8> {
 /// sample is at +0.5, and its volume envelope has no delay and no attack: a voice's first
 /// output sample is already far above −100 dBFS.
 pub fn square_font(rate: u32) -> Arc<SoundFont> {
+    font(rate, true)
+}
+
+/// The same with the SF2 default volume envelope (a delay of −12 000 timecents, 1 ms, and an
+/// attack as long): its voices begin 41 samples after they start at 44.1 kHz.
+pub fn square_font_with_default_envelope(rate: u32) -> Arc<SoundFont> {
+    font(rate, false)
+}
+
+fn font(rate: u32, instant: bool) -> Arc<SoundFont> {
     let period = 100usize;
     let len = 20 * period;
     let mut wave: Vec<i16> = (0..len)
@@ -65,12 +75,13 @@ pub fn square_font(rate: u32) -> Arc<SoundFont> {
     inst.extend_from_slice(&0u16.to_le_bytes());
     inst.extend_from_slice(&name20("EOI"));
     inst.extend_from_slice(&1u16.to_le_bytes());
-    let ibag = [0u8, 0, 0, 0, 4, 0, 0, 0];
+    let gens: u8 = if instant { 4 } else { 2 };
+    let ibag = [0u8, 0, 0, 0, gens, 0, 0, 0];
     let imod = [0u8; 10];
     let mut igen = Vec::new();
     // delayVolEnv and attackVolEnv at their shortest (-32768 timecents: nothing): the SF2
     // default, -12000 (1 ms), delays every voice by 41 samples at 44.1 kHz in rustysynth.
-    for generator in [33u16, 34] {
+    for generator in [33u16, 34].into_iter().filter(|_| instant) {
         igen.extend_from_slice(&generator.to_le_bytes());
         igen.extend_from_slice(&0x8000u16.to_le_bytes());
     }
