@@ -11,7 +11,7 @@
 //!   data gives the strike times, the loudness and the key-ups is said there) or from the
 //!   score ([`events::from_song`]).
 //! - [`synth`]: key events to samples through a SoundFont, every strike's first sound on its
-//!   own sample (sixteen synthesizers side by side, a block phase each; each voice started
+//!   own sample (64 synthesizers side by side, a block phase each; each voice started
 //!   early by the soundfont's own silent lead, measured per note and velocity).
 //! - [`soundfont`]: the user's soundfont, or one a Debian package installed.
 //! - [`wav`]: stereo 32-bit float WAV files through `hound`.
