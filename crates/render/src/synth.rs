@@ -22,7 +22,8 @@
 //!
 //! **Releases.** A key's release goes to the synthesizer holding its voice, at the key-up's
 //! sample, and takes effect at that synthesizer's next block boundary: up to 63 samples
-//! (1.4 ms at 44.1 kHz) after the key's return, where the key's own release lasts tens of
+//! (1.4 ms at 44.1 kHz) after the key's return, and dies away by the soundfont's release
+//! (rustysynth makes a release 10 ms at the least, against clicks), where the key's own release lasts tens of
 //! ms. A strike on a key still sounding ends the sound it had where the new one begins (one
 //! string per key). Successive strikes of a key take turns over 15 MIDI channels (all
 //! playing the piano), so that one strike's release never touches another's voice.

@@ -166,3 +166,53 @@ fn a_dropped_note_is_silent_where_it_would_have_been() {
     assert!(onset::rms(&l, &r, at(500), at(700)) > 0.01);
     assert!(onset::rms(&l, &r, at(3500), at(3700)) > 0.01);
 }
+
+#[test]
+fn each_sound_ends_at_its_keys_return() {
+    // Notes of different lengths; the test font sustains until released and dies away within
+    // about a millisecond after (the SF2 default release).
+    let notes: Vec<(u32, u8, u8, u32)> = (0..8u32)
+        .map(|i| {
+            (
+                300 + i * 900 + (i * 7) % 61,
+                40 + i as u8 * 6,
+                100,
+                60 + 70 * i,
+            )
+        })
+        .collect();
+    let song = smf(&notes);
+    let played = play(&song, orch_perform::thesis_config());
+    // The virtual robot's key-ups, in the song's samples.
+    let ups: Vec<i64> = played
+        .performance
+        .sounds
+        .iter()
+        .filter(|s| s.kind == orch_sim::SoundKind::Up)
+        .map(|s| {
+            let ns = s.time.as_nanos() as i64 - played.start_us as i64 * 1000;
+            (ns as f64 * f64::from(RATE) / 1e9).round() as i64
+        })
+        .collect();
+    assert_eq!(ups.len(), notes.len());
+    let (l, r) = render(&played);
+    let found = onset::onsets(&l, &r, 0.0, RATE as usize / 20);
+    assert_eq!(found.len(), notes.len());
+    for (i, up) in ups.iter().enumerate() {
+        let until = found.get(i + 1).copied().unwrap_or(l.len());
+        let last = (found[i]..until)
+            .rev()
+            .find(|&k| l[k] != 0.0 || r[k] != 0.0)
+            .unwrap() as i64;
+        // Sounding fully until the key is up; then released at the block after the key-up
+        // (up to 63 samples) and gone 60 dB down within rustysynth's shortest release (it
+        // clamps a release to 10 ms at least: 7.5 ms, 331 samples, to −60 dB), plus a block
+        // for the envelope to be seen below that.
+        let before = onset::rms(&l, &r, *up as usize - 100, *up as usize);
+        assert!(before > 0.01, "note {i}: RMS {before} before its key-up");
+        assert!(
+            last >= *up && last <= up + 63 + 331 + 64,
+            "note {i}: the sound ends at sample {last}, the key is up at {up}"
+        );
+    }
+}
