@@ -22,11 +22,12 @@
 //!
 //! **Releases.** A key's release goes to the synthesizer holding its voice, at the key-up's
 //! sample, and takes effect at that synthesizer's next block boundary: up to 63 samples
-//! (1.4 ms at 44.1 kHz) after the key's return, and dies away by the soundfont's release
-//! (rustysynth makes a release 10 ms at the least, against clicks), where the key's own release lasts tens of
-//! ms. A strike on a key still sounding ends the sound it had where the new one begins (one
-//! string per key). Successive strikes of a key take turns over 15 MIDI channels (all
-//! playing the piano), so that one strike's release never touches another's voice.
+//! (1.4 ms at 44.1 kHz) after the key's return (whose own release delay is tens of ms); the
+//! sound then dies away by the soundfont's release (rustysynth makes it 10 ms at the least,
+//! against clicks). A strike on a key still sounding ends the sound it had where the new one
+//! begins (one string per key). Successive strikes of a key take turns over 15 MIDI
+//! channels (all playing the piano), so that one strike's release never touches another's
+//! voice.
 //!
 //! **Dry.** No reverberation or chorus (the synthesizer's effects are off): a silence between
 //! notes is digital silence once the notes' releases have died away (rustysynth ends a voice
