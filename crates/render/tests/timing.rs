@@ -216,3 +216,35 @@ fn each_sound_ends_at_its_keys_return() {
         );
     }
 }
+
+#[test]
+fn a_late_restrike_sounds_late_by_the_accounts_lateness() {
+    // A short note, then the same key again 60 ms later: the key needs its rest (the guard's
+    // re-strike gap) before it can strike again, so the second note is late.
+    let song = smf(&[
+        (500, 60, 100, 30),
+        (560, 60, 100, 100),
+        (1500, 64, 100, 100),
+    ]);
+    let played = play(&song, orch_perform::thesis_config());
+    let lines = played.account(|_| (1, 1));
+    assert_eq!(
+        lines.iter().map(|l| l.outcome).collect::<Vec<_>>(),
+        ["on_time", "late", "on_time"]
+    );
+    let late = &lines[1];
+    let (l, r) = render(&played);
+    // 10 ms of digital silence between the two strikes of the key.
+    let found = onset::onsets(&l, &r, 0.0, RATE as usize / 100);
+    assert_eq!(found.len(), 3, "{found:?}");
+    let at = |ms: f64| (ms * f64::from(RATE) / 1000.0).round() as i64;
+    let heard = found[1] as i64;
+    assert!((heard - at(late.sounded_ms.unwrap())).abs() <= 1);
+    let by = late.onset_ms.unwrap();
+    assert!(by > 1.0, "late by {by} ms");
+    assert!(
+        ((heard - at(late.t_ms)) - at(by)).abs() <= 1,
+        "heard {} samples after its score time, late by {by} ms",
+        heard - at(late.t_ms)
+    );
+}
