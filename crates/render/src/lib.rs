@@ -13,6 +13,7 @@
 //! - [`synth`]: key events to samples through a SoundFont, every strike's first sound on its
 //!   own sample (64 synthesizers side by side, a block phase each; each voice started
 //!   early by the soundfont's own silent lead, measured per note and velocity).
+//! - [`lead`]: how long each note of a soundfont is silent after its voice starts.
 //! - [`soundfont`]: the user's soundfont, or one a Debian package installed.
 //! - [`wav`]: stereo 32-bit float WAV files through `hound`.
 //! - [`onset`]: strikes found in rendered audio, to check a render against the robot.
@@ -60,6 +61,7 @@
 
 pub mod error;
 pub mod events;
+pub mod lead;
 pub mod onset;
 pub mod soundfont;
 pub mod synth;

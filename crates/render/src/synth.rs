@@ -18,7 +18,7 @@
 //! from silence, on the render's own settings: the first sample that is not digital silence)
 //! and the voice is started that much earlier, so that **its first sound is on the sample of
 //! the strike**. A strike in the first `lead` samples of the song starts at sample 0 (late by
-//! the rest of its lead). Leads longer than [`MAX_LEAD_MS`] are not looked for.
+//! the rest of its lead). Leads longer than [`MAX_LEAD_MS`](crate::lead::MAX_LEAD_MS) are not looked for.
 //!
 //! **Releases.** A key's release goes to the synthesizer holding its voice, at the key-up's
 //! sample, and takes effect at that synthesizer's next block boundary: up to 63 samples
@@ -51,6 +51,7 @@ use rustysynth::{SoundFont, Synthesizer, SynthesizerSettings};
 
 use crate::error::RenderError;
 use crate::events::{Action, KeyEvent};
+use crate::lead::Leads;
 
 /// The synthesizers' block, samples (rustysynth takes 8..=1024).
 pub const BLOCK: usize = 64;
@@ -116,7 +117,7 @@ pub struct Rendered {
     pub peak: f32,
     /// Samples whose magnitude passed full scale (each channel counted).
     pub over: u64,
-    /// The longest lead taken off a strike, samples (see [`render`]).
+    /// The longest lead taken off a strike, samples (see the [module notes](self)).
     pub lead_max: u64,
 }
 
@@ -127,7 +128,7 @@ enum Cmd {
     Off(u8, u8),
 }
 
-/// One synthesizer, its blocks starting on the samples `phase + 8k`, and what it is to do
+/// One synthesizer, its blocks starting on the samples `phase + 64k`, and what it is to do
 /// when (in its own samples: its sample `j` is the song's sample `j + phase`).
 struct Lane {
     synth: Synthesizer,
@@ -145,7 +146,7 @@ struct Lane {
 const CHANNELS: [u8; 15] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 12, 13, 14, 15];
 
 /// The synthesizer settings every render and lead measurement uses.
-fn synth_settings(rate: u32, polyphony: usize) -> SynthesizerSettings {
+pub(crate) fn synth_settings(rate: u32, polyphony: usize) -> SynthesizerSettings {
     let mut s = SynthesizerSettings::new(rate as i32);
     s.block_size = BLOCK;
     s.maximum_polyphony = polyphony;
@@ -153,7 +154,7 @@ fn synth_settings(rate: u32, polyphony: usize) -> SynthesizerSettings {
     s
 }
 
-fn synthesizer(
+pub(crate) fn synthesizer(
     font: &Arc<SoundFont>,
     s: &SynthesizerSettings,
     gain: f32,
@@ -164,56 +165,6 @@ fn synthesizer(
         synth.process_midi_message(ch.into(), 0xC0, PROGRAM, 0);
     }
     Ok(synth)
-}
-
-/// Each note's **lead** in this soundfont: the samples from a voice's start to its first
-/// sample that is not silent (the soundfont's volume-envelope delay, which the SF2 default of
-/// −12 000 timecents makes about 1 ms, and any silence at the head of its sample). Measured
-/// once for each note and velocity a render plays, by playing it alone from silence on the
-/// render's own settings, and taken off the strike's start, so that the sound begins on the
-/// strike's sample. At most [`MAX_LEAD_MS`]; a note silent that long counts no lead.
-struct Leads {
-    font: Arc<SoundFont>,
-    settings: SynthesizerSettings,
-    gain: f32,
-    max: usize,
-    known: std::collections::HashMap<(u8, u8), u64>,
-}
-
-/// The longest lead looked for, ms.
-pub const MAX_LEAD_MS: u32 = 100;
-
-impl Leads {
-    fn new(font: &Arc<SoundFont>, rate: u32, gain: f32) -> Self {
-        Self {
-            font: Arc::clone(font),
-            settings: synth_settings(rate, 8),
-            gain,
-            max: (rate * MAX_LEAD_MS / 1000) as usize,
-            known: std::collections::HashMap::new(),
-        }
-    }
-
-    fn of(&mut self, note: u8, velocity: u8) -> Result<u64, RenderError> {
-        if let Some(&lead) = self.known.get(&(note, velocity)) {
-            return Ok(lead);
-        }
-        let mut synth = synthesizer(&self.font, &self.settings, self.gain)?;
-        synth.note_on(0, note.into(), velocity.into());
-        let (mut l, mut r) = ([0f32; 64], [0f32; 64]);
-        let mut lead = 0;
-        let mut seen = 0;
-        while seen < self.max {
-            synth.render(&mut l, &mut r);
-            if let Some(k) = l.iter().zip(&r).position(|(a, b)| *a != 0.0 || *b != 0.0) {
-                lead = (seen + k) as u64;
-                break;
-            }
-            seen += l.len();
-        }
-        self.known.insert((note, velocity), lead);
-        Ok(lead)
-    }
 }
 
 /// Renders `events` (in time order) with `font`, handing each chunk of samples (left,
