@@ -12,8 +12,10 @@ step "install: Debian packages, the firmware's nightly (firmware/install.sh), ru
 # nightly pinned for the firmware with rust-src and rustfmt. tmux: the live view's test drives
 # `orch play` in a real pseudo-terminal with it. libasound2-dev: alsa-lib, which orch-io's `alsa`
 # feature (tested below with --all-features) links. libclang-dev: the `camera` feature's v4l
-# crate generates its kernel bindings with libclang at build time.
-bash firmware/install.sh tmux libasound2-dev libclang-dev
+# crate generates its kernel bindings with libclang at build time. timgm6mb-soundfont: the
+# General MIDI soundfont `orch render`'s tests play through (6 MB, GPL-2; never committed here:
+# installed in /usr/share/sounds/sf2).
+bash firmware/install.sh tmux libasound2-dev libclang-dev timgm6mb-soundfont
 if [ ! -e /dev/snd/seq ]; then
     echo "NOTE: this kernel offers no ALSA sequencer (/dev/snd/seq): the alsa output's real-port test skips (its encoder test runs)"
 fi

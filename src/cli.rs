@@ -33,6 +33,32 @@ pub enum Command {
     /// Play a Standard MIDI File live, following a conductor: a baton video, tap tempo,
     /// MIDI clock or OSC.
     Conduct(ConductArgs),
+    /// Render the virtual robot's performance of a MIDI file (or, with --score, the file
+    /// itself) as sound, through a SoundFont, to a WAV file.
+    Render(RenderArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// The Standard MIDI File.
+    pub file: PathBuf,
+    /// The WAV file to write (stereo, 32-bit float).
+    #[arg(short = 'o', long = "out", value_name = "OUT.wav")]
+    pub out: PathBuf,
+    /// The robot's configuration (see `orch config`); the thesis's robot if not given.
+    #[arg(long, value_name = "FILE")]
+    pub robot: Option<PathBuf>,
+    /// Render the file itself (every note at its score time and velocity) instead of the
+    /// robot's performance, to listen side by side.
+    #[arg(long)]
+    pub score: bool,
+    /// The SoundFont 2 file; without it, one installed by a Debian package
+    /// (fluid-soundfont-gm, timgm6mb-soundfont) in /usr/share/sounds/sf2.
+    #[arg(long, value_name = "SF2")]
+    pub soundfont: Option<PathBuf>,
+    /// Samples a second.
+    #[arg(long, default_value_t = 44_100, value_name = "HZ")]
+    pub rate: u32,
 }
 
 /// Where the bytes come from and how they are written.

@@ -18,6 +18,7 @@ pub mod hex;
 pub mod input;
 pub mod interpret;
 pub mod play;
+pub mod render;
 pub mod robot;
 pub mod roll;
 pub mod run;
@@ -35,5 +36,6 @@ pub fn run(command: cli::Command) -> anyhow::Result<()> {
         cli::Command::Baton(args) => baton::run(&args),
         cli::Command::Run(args) => run::run(&args),
         cli::Command::Conduct(args) => conduct::run(&args),
+        cli::Command::Render(args) => render::run(&args),
     }
 }

@@ -1,0 +1,348 @@
+//! Key events to samples, every strike sounding from its own sample.
+//!
+//! **Exact starts.** rustysynth (like FluidSynth and every block synthesizer) takes a
+//! Note-On at the start of its next block: with its 64-sample default a strike would land up
+//! to 1.45 ms late at 44.1 kHz, by an amount that depends on where the block boundaries fall.
+//! Its blocks are at least 8 samples long, so a block of one sample is not to be had.
+//! Instead, [`PHASES`] synthesizers run side by side on the same soundfont, each with blocks
+//! of [`BLOCK`] (64) samples, synthesizer `p`'s blocks starting on the samples `s` with
+//! `s % 64 == p`; a voice that must start on sample `s` goes to synthesizer `s % 64`, at the
+//! very start of one of its blocks, so its first sample is sample `s`. Their outputs are summed (the synthesis is linear: a voice sounds the
+//! same whichever synthesizer plays it, and each voice's envelope is stepped at the same
+//! offsets from its own start).
+//!
+//! **The soundfont's lead.** A voice is silent for a while after it starts: rustysynth
+//! applies the SoundFont default volume-envelope delay of −12 000 timecents literally (1 ms:
+//! 41 samples at 44.1 kHz), and a font's samples may begin with silence (TimGM6mb's pianos:
+//! up to 7.3 ms). Each note's lead at each velocity played is measured once (the note alone
+//! from silence, on the render's own settings: the first sample that is not digital silence)
+//! and the voice is started that much earlier, so that **its first sound is on the sample of
+//! the strike**. A strike in the first `lead` samples of the song starts at sample 0 (late by
+//! the rest of its lead). Leads longer than [`MAX_LEAD_MS`](crate::lead::MAX_LEAD_MS) are not looked for.
+//!
+//! **Releases.** A key's release goes to the synthesizer holding its voice, at the key-up's
+//! sample, and takes effect at that synthesizer's next block boundary: up to 63 samples
+//! (1.4 ms at 44.1 kHz) after the key's return (whose own release delay is tens of ms); the
+//! sound then dies away by the soundfont's release (rustysynth makes it 10 ms at the least,
+//! against clicks). A strike on a key still sounding ends the sound it had where the new one
+//! begins (one string per key). Successive strikes of a key take turns over 15 MIDI
+//! channels (all playing the piano), so that one strike's release never touches another's
+//! voice.
+//!
+//! **Dry.** No reverberation or chorus (the synthesizer's effects are off): a silence between
+//! notes is digital silence once the notes' releases have died away (rustysynth ends a voice
+//! under −60 dB).
+//!
+//! **Speed.** A voice costs more in short blocks (rustysynth steps its envelopes, LFOs and
+//! filter once a block): on the densest corpus file (27 003 notes in 10 min) blocks of 64
+//! rendered 91× real time on one core where blocks of 16 made 48× (idle synthesizers cost
+//! little). So the blocks are rustysynth's default 64, and releases are within 1.4 ms. The
+//! synthesizers are rendered in [`GROUPS`] fixed groups, on threads where the machine has
+//! more than one core; the groups are summed in order either way, so the samples are the same
+//! on any machine. Rendering is
+//! streamed in chunks of [`CHUNK`] samples, so memory follows the notes sounding, not the
+//! length of the piece; it ends when every voice has died away after the last event (at most
+//! [`MAX_TAIL_S`] later).
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+
+use rustysynth::{SoundFont, Synthesizer, SynthesizerSettings};
+
+use crate::error::RenderError;
+use crate::events::{Action, KeyEvent};
+use crate::lead::Leads;
+
+/// The synthesizers' block, samples (rustysynth takes 8..=1024).
+pub const BLOCK: usize = 64;
+/// Synthesizers side by side, one for each sample position in a block.
+pub const PHASES: usize = BLOCK;
+/// Samples rendered at a time.
+pub const CHUNK: usize = 16_384;
+/// The synthesizers are rendered in this many groups, on as many threads where the machine
+/// has more than one core.
+pub const GROUPS: usize = 2;
+/// The longest a render goes on after its last event, seconds (a sound still ringing then
+/// is cut).
+pub const MAX_TAIL_S: u32 = 30;
+/// Voices each synthesizer may play at once (rustysynth's most): tails of released notes
+/// are never stolen by new strikes in any file a robot can play.
+const POLYPHONY: usize = 256;
+/// The General MIDI program every key plays: 0, Acoustic Grand Piano.
+const PROGRAM: i32 = 0;
+/// The synthesizer velocity loudness 1 plays at. See [`synth_velocity`].
+pub const SOFTEST_VELOCITY: u8 = 16;
+
+/// The synthesizer's velocity for a loudness on the MIDI velocity scale (1..=127).
+///
+/// rustysynth's gain goes with the square of velocity, (v/127)²: −84 dB at 1, and a voice
+/// under −60 dB is never started, so velocities below about 4 (more with a soundfont's own
+/// attenuation) make no sound at all. On the robot, loudness 1 is a key's softest sound, a
+/// sound all the same. So loudness 1..=127 plays linearly as velocity
+/// [`SOFTEST_VELOCITY`]..=127 (16: −36 dB, about a piano's range from its softest to its
+/// loudest), for the robot and the score alike.
+pub fn synth_velocity(loudness: u8) -> u8 {
+    let l = u32::from(loudness.clamp(1, 127));
+    let span = 127 - u32::from(SOFTEST_VELOCITY);
+    (u32::from(SOFTEST_VELOCITY) + ((l - 1) * span + 63) / 126) as u8
+}
+
+/// How to render.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// Samples a second (16 000..=192 000).
+    pub sample_rate: u32,
+    /// The synthesizers' master volume (rustysynth's default is 0.5).
+    pub gain: f32,
+}
+
+impl Default for Settings {
+    /// 44 100 Hz, gain 0.5.
+    fn default() -> Self {
+        Self {
+            sample_rate: 44_100,
+            gain: 0.5,
+        }
+    }
+}
+
+/// What a render gave.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Rendered {
+    /// Samples a channel written (frames).
+    pub frames: u64,
+    /// Strikes played.
+    pub strikes: u64,
+    /// The largest sample magnitude, 1.0 = full scale.
+    pub peak: f32,
+    /// Samples whose magnitude passed full scale (each channel counted).
+    pub over: u64,
+    /// The longest lead taken off a strike, samples (see the [module notes](self)).
+    pub lead_max: u64,
+}
+
+enum Cmd {
+    /// Channel, note, velocity.
+    On(u8, u8, u8),
+    /// Channel, note.
+    Off(u8, u8),
+}
+
+/// One synthesizer, its blocks starting on the samples `phase + 64k`, and what it is to do
+/// when (in its own samples: its sample `j` is the song's sample `j + phase`).
+struct Lane {
+    synth: Synthesizer,
+    phase: u64,
+    /// Its own samples rendered so far.
+    pos: u64,
+    queue: VecDeque<(u64, Cmd)>,
+    left: Vec<f32>,
+    right: Vec<f32>,
+}
+
+/// The MIDI channels voices are spread over, every one playing [`PROGRAM`]: successive
+/// strikes of one key take turns, so releasing one strike's voice never touches another's
+/// (channel 10, index 9, is the drums' in General MIDI: not used).
+const CHANNELS: [u8; 15] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 12, 13, 14, 15];
+
+/// The synthesizer settings every render and lead measurement uses.
+pub(crate) fn synth_settings(rate: u32, polyphony: usize) -> SynthesizerSettings {
+    let mut s = SynthesizerSettings::new(rate as i32);
+    s.block_size = BLOCK;
+    s.maximum_polyphony = polyphony;
+    s.enable_reverb_and_chorus = false;
+    s
+}
+
+pub(crate) fn synthesizer(
+    font: &Arc<SoundFont>,
+    s: &SynthesizerSettings,
+    gain: f32,
+) -> Result<Synthesizer, RenderError> {
+    let mut synth = Synthesizer::new(font, s).map_err(|e| RenderError::Synth(e.to_string()))?;
+    synth.set_master_volume(gain);
+    for ch in CHANNELS {
+        synth.process_midi_message(ch.into(), 0xC0, PROGRAM, 0);
+    }
+    Ok(synth)
+}
+
+/// Renders `events` (in time order) with `font`, handing each chunk of samples (left,
+/// right) to `sink` in order.
+pub fn render(
+    font: &Arc<SoundFont>,
+    events: &[KeyEvent],
+    settings: &Settings,
+    mut sink: impl FnMut(&[f32], &[f32]) -> Result<(), RenderError>,
+) -> Result<Rendered, RenderError> {
+    let rate = settings.sample_rate;
+    let s = synth_settings(rate, POLYPHONY);
+    let mut lanes = Vec::with_capacity(PHASES);
+    for phase in 0..PHASES as u64 {
+        lanes.push(Lane {
+            synth: synthesizer(font, &s, settings.gain)?,
+            phase,
+            pos: 0,
+            queue: VecDeque::new(),
+            left: vec![0.0; CHUNK],
+            right: vec![0.0; CHUNK],
+        });
+    }
+    let mut leads = Leads::new(font, rate, settings.gain);
+    // The events in time order; who holds each note's voice (its lane, channel and start);
+    // each lane's commands in its own samples, sorted by time below (a strike starts early by
+    // its lead, so a lane's commands do not come in the events' order).
+    let mut order: Vec<(u64, usize)> = events
+        .iter()
+        .enumerate()
+        .map(|(i, e)| (e.sample(rate), i))
+        .collect();
+    order.sort_unstable();
+    let mut holder: [Option<(usize, u8, u64)>; 128] = [None; 128];
+    let mut turn = [0usize; 128];
+    let mut cmds: Vec<Vec<(u64, Cmd)>> = (0..PHASES).map(|_| Vec::new()).collect();
+    let mut out = Rendered::default();
+    let mut last = 0u64;
+    for &(at, i) in &order {
+        let e = &events[i];
+        let note = e.note & 0x7F;
+        let n = usize::from(note);
+        let start = match e.action {
+            Action::Strike { velocity } => {
+                let v = synth_velocity(velocity);
+                let lead = leads.of(note, v)?;
+                out.lead_max = out.lead_max.max(lead);
+                Some((at.saturating_sub(lead), v))
+            }
+            Action::Release => None,
+        };
+        // The sound this key had ends at its key-up, or where a new strike begins.
+        if let Some((q, ch, began)) = holder[n].take() {
+            let off = start.map_or(at, |(s, _)| s).max(began);
+            cmds[q].push((off - q as u64, Cmd::Off(ch, note)));
+            last = last.max(off);
+        }
+        if let Some((begin, v)) = start {
+            let p = (begin % PHASES as u64) as usize;
+            let ch = CHANNELS[turn[n] % CHANNELS.len()];
+            turn[n] += 1;
+            cmds[p].push((begin - p as u64, Cmd::On(ch, note, v)));
+            holder[n] = Some((p, ch, begin));
+            out.strikes += 1;
+        }
+        last = last.max(at);
+    }
+    for (lane, mut c) in lanes.iter_mut().zip(cmds) {
+        c.sort_by_key(|&(t, _)| t);
+        lane.queue = c.into();
+    }
+    let end_cap = last + u64::from(MAX_TAIL_S) * u64::from(rate);
+    let (mut left, mut right) = (vec![0f32; CHUNK], vec![0f32; CHUNK]);
+    // The lanes in GROUPS fixed groups, each summed into its own buffers, then the groups in
+    // order: the same arithmetic whether they run on threads or one after the other.
+    let mut sums: Vec<(Vec<f32>, Vec<f32>)> = (0..GROUPS)
+        .map(|_| (vec![0f32; CHUNK], vec![0f32; CHUNK]))
+        .collect();
+    let parallel = std::thread::available_parallelism().map_or(1, |n| n.get()) > 1;
+    let per = PHASES.div_ceil(GROUPS);
+    let mut c = 0u64;
+    loop {
+        let n = CHUNK.min((end_cap - c) as usize);
+        let work = |(group, (l, r)): (&mut [Lane], &mut (Vec<f32>, Vec<f32>))| {
+            l[..n].fill(0.0);
+            r[..n].fill(0.0);
+            for lane in group {
+                lane.fill(c, n, l, r);
+            }
+        };
+        if parallel {
+            std::thread::scope(|scope| {
+                for job in lanes.chunks_mut(per).zip(sums.iter_mut()) {
+                    scope.spawn(move || work(job));
+                }
+            });
+        } else {
+            lanes.chunks_mut(per).zip(sums.iter_mut()).for_each(work);
+        }
+        left[..n].fill(0.0);
+        right[..n].fill(0.0);
+        for (l, r) in &sums {
+            for (d, x) in left[..n].iter_mut().zip(&l[..n]) {
+                *d += *x;
+            }
+            for (d, x) in right[..n].iter_mut().zip(&r[..n]) {
+                *d += *x;
+            }
+        }
+        let silent = left[..n].iter().chain(&right[..n]).all(|&x| x == 0.0);
+        if c > last && silent {
+            break;
+        }
+        for &x in left[..n].iter().chain(&right[..n]) {
+            out.peak = out.peak.max(x.abs());
+            out.over += u64::from(x.abs() > 1.0);
+        }
+        sink(&left[..n], &right[..n])?;
+        out.frames += n as u64;
+        c += n as u64;
+        if c >= end_cap {
+            break;
+        }
+    }
+    Ok(out)
+}
+
+impl Lane {
+    /// Adds this lane's sound for the song's samples `c..c + n` into `left` and `right`.
+    fn fill(&mut self, c: u64, n: usize, left: &mut [f32], right: &mut [f32]) {
+        let end = c + n as u64; // the song's samples
+        if end <= self.phase {
+            return;
+        }
+        let until = end - self.phase; // its own
+        while self.pos < until {
+            let next = match self.queue.front() {
+                Some(&(t, _)) if t <= self.pos => {
+                    let (_, cmd) = self.queue.pop_front().expect("front");
+                    match cmd {
+                        Cmd::On(ch, note, v) => {
+                            self.synth.note_on(ch.into(), note.into(), v.into())
+                        }
+                        Cmd::Off(ch, note) => self.synth.note_off(ch.into(), note.into()),
+                    }
+                    continue;
+                }
+                Some(&(t, _)) => t.min(until),
+                None => until,
+            };
+            let len = (next - self.pos) as usize;
+            // Where its own sample `pos` falls in the chunk.
+            let at = (self.pos + self.phase - c) as usize;
+            let (l, r) = (&mut self.left[..len], &mut self.right[..len]);
+            self.synth.render(l, r);
+            for (d, s) in left[at..at + len].iter_mut().zip(l.iter()) {
+                *d += *s;
+            }
+            for (d, s) in right[at..at + len].iter_mut().zip(r.iter()) {
+                *d += *s;
+            }
+            self.pos = next;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_loudness_has_a_velocity_that_sounds_and_louder_is_louder() {
+        assert_eq!(synth_velocity(1), SOFTEST_VELOCITY);
+        assert_eq!(synth_velocity(127), 127);
+        assert_eq!(synth_velocity(0), SOFTEST_VELOCITY);
+        for l in 2..=127u8 {
+            assert!(synth_velocity(l) >= synth_velocity(l - 1), "{l}");
+        }
+        assert!(synth_velocity(64) > synth_velocity(20));
+    }
+}

@@ -1,0 +1,250 @@
+//! The render against the virtual robot: each strike found in the audio on the sample the
+//! virtual robot says it sounded (within 1), a dropped note silent where it would have been.
+//! The strikes are found by `orch_render::onset` in the samples, and the robot's times are
+//! read from its note-by-note account, not from the renderer.
+
+mod support;
+
+use orch_perform::{perform, song_events, Link, MidiRecording, Played, Setup, Tempo};
+use orch_render::{events, onset, synth, Settings};
+use orch_seq::{Song, VirtualClock};
+
+const RATE: u32 = 44_100;
+
+/// A format-0 file, 480 ticks a quarter at 120 bpm (1 ms = 0.96 tick): `(ms, note, velocity,
+/// length ms)`, in time order.
+fn smf(notes: &[(u32, u8, u8, u32)]) -> Song {
+    let mut ev: Vec<(u32, [u8; 3])> = Vec::new();
+    for &(at, n, v, len) in notes {
+        ev.push((at, [0x90, n, v]));
+        ev.push((at + len, [0x80, n, 0]));
+    }
+    ev.sort_by_key(|e| e.0);
+    let mut track = Vec::new();
+    let mut last = 0u32;
+    for (ms, bytes) in ev {
+        let tick = ms * 96 / 100;
+        let mut d = tick - last;
+        last = tick;
+        let mut var = vec![(d & 0x7F) as u8];
+        d >>= 7;
+        while d > 0 {
+            var.insert(0, 0x80 | (d & 0x7F) as u8);
+            d >>= 7;
+        }
+        track.extend_from_slice(&var);
+        track.extend_from_slice(&bytes);
+    }
+    track.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
+    let mut b = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
+    b.extend_from_slice(&(track.len() as u32).to_be_bytes());
+    b.extend_from_slice(&track);
+    Song::parse(&b).unwrap()
+}
+
+fn play(song: &Song, config: orch_core::Config<{ orch_perform::MAX_BOARDS }>) -> Played {
+    let setup = Setup {
+        config,
+        sim: orch_sim::SimConfig {
+            keep: orch_sim::Keep::Everything,
+            ..orch_sim::SimConfig::thesis()
+        },
+        compensation: true,
+        tempo: Tempo::NORMAL,
+        link: Link::Direct,
+    };
+    perform::<_, MidiRecording>(
+        &setup,
+        song_events(song),
+        song.notes(),
+        None,
+        &mut VirtualClock::new(),
+        None,
+        None,
+    )
+    .unwrap()
+}
+
+/// The render of `played` with the test font, both channels.
+fn render(played: &Played) -> (Vec<f32>, Vec<f32>) {
+    render_with(played, support::square_font(RATE))
+}
+
+fn render_with(
+    played: &Played,
+    font: std::sync::Arc<orch_render::SoundFont>,
+) -> (Vec<f32>, Vec<f32>) {
+    let keys = events::from_performance(&played.performance, played.start_us, 36).unwrap();
+    let (mut l, mut r) = (Vec::new(), Vec::new());
+    synth::render(&font, &keys, &Settings::default(), |a, b| {
+        l.extend_from_slice(a);
+        r.extend_from_slice(b);
+        Ok(())
+    })
+    .unwrap();
+    (l, r)
+}
+
+/// The sample each sounded note's strike should begin on, by the account, in score order.
+fn sounded_samples(played: &Played) -> Vec<i64> {
+    played
+        .account(|_| (1, 1))
+        .iter()
+        .filter_map(|n| n.sounded_ms)
+        .map(|ms| (ms * f64::from(RATE) / 1000.0).round() as i64)
+        .collect()
+}
+
+#[test]
+fn every_strike_lands_within_one_sample_of_the_virtual_robots_time() {
+    strikes_land_on_the_robots_samples(support::square_font(RATE));
+}
+
+#[test]
+fn a_soundfonts_envelope_delay_is_taken_off_each_strikes_start() {
+    // rustysynth plays the SF2 default delay (1 ms) literally: 41 samples of silence at the
+    // head of every voice, which the renderer measures and starts each voice early by.
+    strikes_land_on_the_robots_samples(support::square_font_with_default_envelope(RATE));
+}
+
+fn strikes_land_on_the_robots_samples(font: std::sync::Arc<orch_render::SoundFont>) {
+    // Single notes with silence between, across the keys, at times that fall on many a
+    // sample position of the synthesizers' blocks (32 of the 64 at 44.1 kHz: each its own).
+    let notes: Vec<(u32, u8, u8, u32)> = (0..32u32)
+        .map(|i| {
+            (
+                300 + i * 700 + (i * 7) % 61,
+                36 + (i as u8 * 5) % 61,
+                100,
+                120,
+            )
+        })
+        .collect();
+    let song = smf(&notes);
+    let played = play(&song, orch_perform::thesis_config());
+    let want = sounded_samples(&played);
+    assert_eq!(want.len(), notes.len(), "every note sounds on the robot");
+    let (l, r) = render_with(&played, font);
+    let found = onset::onsets(&l, &r, 0.0, RATE as usize / 20);
+    assert_eq!(found.len(), want.len(), "one onset a strike: {found:?}");
+    let mut phases = [false; synth::PHASES];
+    for (f, w) in found.iter().zip(&want) {
+        assert!(
+            (*f as i64 - w).abs() <= 1,
+            "onset at sample {f}, the robot's strike at {w}"
+        );
+        phases[(*w as usize) % synth::PHASES] = true;
+    }
+    assert!(
+        phases.iter().filter(|p| **p).count() >= 24,
+        "the strikes fall on 24 positions in a block or more: {phases:?}"
+    );
+}
+
+#[test]
+fn a_dropped_note_is_silent_where_it_would_have_been() {
+    // Note 20 is below the thesis's keys: dropped, not folded.
+    let song = smf(&[
+        (500, 60, 100, 200),
+        (2000, 20, 100, 200),
+        (3500, 72, 100, 200),
+    ]);
+    let mut config = orch_perform::thesis_config();
+    config.out_of_range = orch_core::OutOfRange::Drop;
+    let played = play(&song, config);
+    let report = played.report(None);
+    assert_eq!(report.outcomes.dropped.range, 1);
+    let (l, r) = render(&played);
+    let found = onset::onsets(&l, &r, 0.0, RATE as usize / 20);
+    assert_eq!(found.len(), 2, "{found:?}");
+    let at = |ms: usize| ms * RATE as usize / 1000;
+    assert_eq!(
+        onset::rms(&l, &r, at(1900), at(2600)),
+        0.0,
+        "silence at 2 s"
+    );
+    assert!(onset::rms(&l, &r, at(500), at(700)) > 0.01);
+    assert!(onset::rms(&l, &r, at(3500), at(3700)) > 0.01);
+}
+
+#[test]
+fn each_sound_ends_at_its_keys_return() {
+    // Notes of different lengths; the test font sustains until released and dies away within
+    // about a millisecond after (the SF2 default release).
+    let notes: Vec<(u32, u8, u8, u32)> = (0..8u32)
+        .map(|i| {
+            (
+                300 + i * 900 + (i * 7) % 61,
+                40 + i as u8 * 6,
+                100,
+                60 + 70 * i,
+            )
+        })
+        .collect();
+    let song = smf(&notes);
+    let played = play(&song, orch_perform::thesis_config());
+    // The virtual robot's key-ups, in the song's samples.
+    let ups: Vec<i64> = played
+        .performance
+        .sounds
+        .iter()
+        .filter(|s| s.kind == orch_sim::SoundKind::Up)
+        .map(|s| {
+            let ns = s.time.as_nanos() as i64 - played.start_us as i64 * 1000;
+            (ns as f64 * f64::from(RATE) / 1e9).round() as i64
+        })
+        .collect();
+    assert_eq!(ups.len(), notes.len());
+    let (l, r) = render(&played);
+    let found = onset::onsets(&l, &r, 0.0, RATE as usize / 20);
+    assert_eq!(found.len(), notes.len());
+    for (i, up) in ups.iter().enumerate() {
+        let until = found.get(i + 1).copied().unwrap_or(l.len());
+        let last = (found[i]..until)
+            .rev()
+            .find(|&k| l[k] != 0.0 || r[k] != 0.0)
+            .unwrap() as i64;
+        // Sounding fully until the key is up; then released at the block after the key-up
+        // (up to 63 samples) and gone 60 dB down within rustysynth's shortest release (it
+        // clamps a release to 10 ms at least: 7.5 ms, 331 samples, to −60 dB), plus a block
+        // for the envelope to be seen below that.
+        let before = onset::rms(&l, &r, *up as usize - 100, *up as usize);
+        assert!(before > 0.01, "note {i}: RMS {before} before its key-up");
+        assert!(
+            last >= *up && last <= up + 63 + 331 + 64,
+            "note {i}: the sound ends at sample {last}, the key is up at {up}"
+        );
+    }
+}
+
+#[test]
+fn a_late_restrike_sounds_late_by_the_accounts_lateness() {
+    // A short note, then the same key again 60 ms later: the key needs its rest (the guard's
+    // re-strike gap) before it can strike again, so the second note is late.
+    let song = smf(&[
+        (500, 60, 100, 30),
+        (560, 60, 100, 100),
+        (1500, 64, 100, 100),
+    ]);
+    let played = play(&song, orch_perform::thesis_config());
+    let lines = played.account(|_| (1, 1));
+    assert_eq!(
+        lines.iter().map(|l| l.outcome).collect::<Vec<_>>(),
+        ["on_time", "late", "on_time"]
+    );
+    let late = &lines[1];
+    let (l, r) = render(&played);
+    // 10 ms of digital silence between the two strikes of the key.
+    let found = onset::onsets(&l, &r, 0.0, RATE as usize / 100);
+    assert_eq!(found.len(), 3, "{found:?}");
+    let at = |ms: f64| (ms * f64::from(RATE) / 1000.0).round() as i64;
+    let heard = found[1] as i64;
+    assert!((heard - at(late.sounded_ms.unwrap())).abs() <= 1);
+    let by = late.onset_ms.unwrap();
+    assert!(by > 1.0, "late by {by} ms");
+    assert!(
+        ((heard - at(late.t_ms)) - at(by)).abs() <= 1,
+        "heard {} samples after its score time, late by {by} ms",
+        heard - at(late.t_ms)
+    );
+}
