@@ -5,16 +5,17 @@ use std::fs::File;
 use std::io::{BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context;
-use orch_io::{Channels, OutSpec, OutStats, Output, Target};
+use orch_io::{OutSpec, OutStats, Output, Target};
 use orch_perform::{
-    perform, realtime, song_events, Control, Link, Live, MidiRecording, Outcome, Played, Report,
-    Setup, Spread, Tempo,
+    perform, song_events, Control, Link, MidiRecording, Outcome, Played, Report, Setup, Spread,
+    Tempo,
 };
 use orch_seq::{Song, VirtualClock};
+use orch_stage::session::{lane_events, Lane, Session, SessionFailure, Snapshot};
 use serde::Serialize;
 
 use crate::cli::{AnalyzeArgs, PlayArgs};
@@ -239,28 +240,12 @@ fn write_board_writes(
     Ok(())
 }
 
-/// Opens every output: one robot (a lane) each.
+/// Opens every output: one robot (a lane) each; a bad output is bad input (exit 2).
 pub(crate) fn open_lanes(specs: Vec<OutSpec>, setup: &Setup) -> anyhow::Result<Vec<Lane>> {
-    let mut lanes = Vec::new();
-    for spec in specs {
-        let setup = Setup {
-            link: if spec.is_din() {
-                Link::Din
-            } else {
-                Link::Direct
-            },
-            ..setup.clone()
-        };
-        let out = Output::open(
-            &spec.target,
-            &setup.config,
-            &setup.sim.kinds,
-            setup.sim.pwm_hz,
-        )
-        .map_err(|e| bad_input(format!("--out {}: {e}", spec.text)))?;
-        lanes.push(Lane { spec, setup, out });
-    }
-    Ok(lanes)
+    orch_stage::session::open_lanes(specs, setup).map_err(|e| match e {
+        orch_stage::LiveError::BadInput(m) => bad_input(m),
+        e => anyhow::Error::new(e),
+    })
 }
 
 /// `--from BAR`: where bar `bar` begins, µs of score time; bad input (exit 2) for a bar the
@@ -380,29 +365,6 @@ pub(crate) fn out_specs(outs: &[String]) -> anyhow::Result<Vec<OutSpec>> {
         .collect()
 }
 
-/// One robot of a performance: where it plays, how, and its opened output (none for the
-/// virtual robot alone).
-pub(crate) struct Lane {
-    spec: OutSpec,
-    setup: Setup,
-    out: Option<Output>,
-}
-
-/// The song's events for a robot that takes `channels`, and its notes.
-fn lane_events(song: &Song, channels: Channels) -> (Vec<orch_perform::ScoreEvent>, usize) {
-    if channels == Channels::ALL {
-        return (song_events(song).collect(), song.notes());
-    }
-    let events: Vec<_> = song_events(song)
-        .filter(|e| channels.passes(&e.bytes))
-        .collect();
-    let notes = events
-        .iter()
-        .filter(|e| e.bytes.note_on().is_some())
-        .count();
-    (events, notes)
-}
-
 /// Set by SIGINT, SIGTERM and SIGHUP: stop the way `q` does.
 fn stop_on_signals() -> anyhow::Result<Arc<AtomicBool>> {
     let flag = Arc::new(AtomicBool::new(false));
@@ -415,27 +377,6 @@ fn stop_on_signals() -> anyhow::Result<Arc<AtomicBool>> {
     }
     Ok(flag)
 }
-
-/// Stops every robot when the thread it lives on panics (its output, dropped on the way, has
-/// let go of its keys).
-struct StopOnPanic(Arc<Control>);
-
-impl Drop for StopOnPanic {
-    fn drop(&mut self) {
-        if std::thread::panicking() {
-            self.0.stop();
-        }
-    }
-}
-
-type LaneResult = Result<(Played, Option<OutStats>), orch_perform::PerformError>;
-
-/// A robot's sender thread, with where it stands.
-type Sender = (
-    OutSpec,
-    std::thread::JoinHandle<(realtime::Priority, LaneResult)>,
-    Arc<Mutex<Option<Live>>>,
-);
 
 /// Plays in real time: one sender thread per robot (real-time priority where allowed), all on
 /// one clock, the view on this thread. `q`, SIGINT, SIGTERM and SIGHUP stop every robot with
@@ -464,57 +405,24 @@ pub(crate) fn play_live(
     if let Some(t) = from_us {
         control.jump_to(t);
     }
-    let song = Arc::new(song);
-    let (low, tempo) = match lanes.first() {
-        Some(l) => (l.setup.config.range.low().get(), l.setup.tempo),
-        None => return Ok(Vec::new()),
-    };
-    let mut senders = Vec::new();
-    let mut notes_total = 0u64;
-    for lane in lanes {
-        let Lane {
-            spec,
-            setup,
-            mut out,
-        } = lane;
-        let (events, notes) = lane_events(&song, spec.channels);
-        notes_total += notes as u64;
-        let live: Arc<Mutex<Option<Live>>> = Arc::new(Mutex::new(None));
-        let (control, live_in) = (Arc::clone(&control), Arc::clone(&live));
-        let sender = realtime::spawn(move || -> LaneResult {
-            let _guard = StopOnPanic(Arc::clone(&control));
-            let mut clock = realtime::PreciseClock::starting_at(origin);
-            let mut on_live = |l: &Live| {
-                *live_in.lock().unwrap_or_else(|e| e.into_inner()) = Some(l.clone());
-            };
-            let played = perform::<_, Output>(
-                &setup,
-                events.into_iter(),
-                notes,
-                out.as_mut(),
-                &mut clock,
-                Some(&control),
-                Some(&mut on_live),
-            )?;
-            Ok((played, out.as_ref().map(Output::stats)))
-        });
-        senders.push((spec, sender, live));
+    if lanes.is_empty() {
+        return Ok(Vec::new());
     }
+    let session = Session::start(song, lanes, Arc::clone(&control), origin);
     let watch = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         let mut view = if show { Some(View::start()?) } else { None };
-        let total_s = song.duration_us() as f64 / 1e6 / tempo.get();
         let mut view_error = None;
         // The bar being typed, and the bar playing (for `[` and `]`).
         let mut typed = String::new();
         let mut bar_now = 1;
-        while !senders.iter().all(|(_, s, _)| s.is_finished()) {
+        while !session.is_finished() {
             if signalled.load(Ordering::SeqCst) {
                 control.stop();
             }
             if let Some(v) = view.as_mut() {
                 let mut on_key = |key: crate::view::Key| {
                     if is_jump_key(key) {
-                        if let Some(t) = jump_key(key, &mut typed, bar_now, &song) {
+                        if let Some(t) = jump_key(key, &mut typed, bar_now, session.song()) {
                             control.jump_to(t);
                         }
                     } else if let (Some(c), crate::view::Key::Char(ch)) = (conductor.as_mut(), key)
@@ -526,7 +434,8 @@ pub(crate) fn play_live(
                 if crate::view::keys(Some(&mut on_key), Duration::from_millis(20)) {
                     control.stop();
                 }
-                if let Some(mut scene) = scene(&senders, &song, &title, low, total_s, notes_total) {
+                if let Some(snapshot) = session.snapshot() {
+                    let mut scene = scene(snapshot, &title);
                     bar_now = scene.bar;
                     scene.command = command;
                     scene.prompt = (!typed.is_empty()).then(|| typed.clone());
@@ -549,32 +458,12 @@ pub(crate) fn play_live(
         // The view panicked: stop the robots and let them go before the panic goes on.
         control.stop();
     }
-    let mut played = Vec::new();
-    let mut failed = None;
-    let mut warned = false;
-    for (spec, sender, _) in senders {
-        match sender.join() {
-            Ok((priority, Ok((p, stats)))) => {
-                if priority != realtime::Priority::Realtime && !warned {
-                    warned = true;
-                    eprintln!(
-                        "orch: note: the OS refused real-time priority to the sender \
-                         ({priority:?}); under load its messages may be late (see lateness in \
-                         the report)"
-                    );
-                }
-                played.push((spec, p, stats))
-            }
-            Ok((_raised, Err(e))) => {
-                failed.get_or_insert(anyhow::Error::new(e).context(format!("--out {}", spec.text)));
-            }
-            Err(_) => {
-                failed.get_or_insert(anyhow::anyhow!(
-                    "the sender thread of --out {} panicked (its keys were released)",
-                    spec.text
-                ));
-            }
-        }
+    let finished = session.finish();
+    if finished.priority_refused {
+        eprintln!(
+            "orch: note: the OS refused real-time priority to the sender; under load its \
+             messages may be late (see lateness in the report)"
+        );
     }
     match watch {
         Err(panic) => std::panic::resume_unwind(panic),
@@ -582,52 +471,39 @@ pub(crate) fn play_live(
         Ok(Ok(Some(e))) => return Err(e.into()),
         Ok(Ok(None)) => {}
     }
-    match failed {
-        Some(e) => Err(e),
-        None => Ok(played),
+    if let Some((spec, why)) = finished.failed {
+        return Err(match why {
+            SessionFailure::Performance(e) => {
+                anyhow::Error::new(e).context(format!("--out {}", spec.text))
+            }
+            SessionFailure::Panicked => anyhow::anyhow!(
+                "the sender thread of --out {} panicked (its keys were released)",
+                spec.text
+            ),
+        });
     }
+    Ok(finished
+        .ended
+        .into_iter()
+        .map(|e| (e.spec, e.played, e.stats))
+        .collect())
 }
 
-/// What the view shows: every robot's keys together, where the first robot stands.
-fn scene(
-    senders: &[Sender],
-    song: &Song,
-    title: &str,
-    low: u8,
-    total_s: f64,
-    notes: u64,
-) -> Option<Scene> {
-    let mut all: Option<Live> = None;
-    let mut sent = 0;
-    for (_, _, live) in senders {
-        let Some(l) = live.lock().unwrap_or_else(|e| e.into_inner()).clone() else {
-            continue;
-        };
-        sent += l.notes_sent;
-        match all.as_mut() {
-            None => all = Some(l),
-            Some(a) => {
-                for (d, k) in a.keys_down.iter_mut().zip(&l.keys_down) {
-                    *d |= *k;
-                }
-            }
-        }
-    }
-    let l = all?;
-    let (bar, beat) = song.bar_beat(l.song_us);
-    Some(Scene {
+/// What the view shows of a session's snapshot.
+fn scene(s: Snapshot, title: &str) -> Scene {
+    Scene {
         title: title.to_string(),
-        low_note: low,
-        down: l.keys_down,
-        bar,
-        beat,
-        bpm: song.tempo_at(l.song_us).bpm() * l.tempo,
-        elapsed_s: l.song_us as f64 / 1e6 / l.tempo,
-        total_s,
-        notes_sent: sent,
-        notes,
+        low_note: s.low_note,
+        down: s.keys_down,
+        bar: s.bar,
+        beat: s.beat,
+        bpm: s.bpm,
+        elapsed_s: s.elapsed_s,
+        total_s: s.total_s,
+        notes_sent: s.notes_sent,
+        notes: s.notes,
         ..Scene::default()
-    })
+    }
 }
 
 /// What happened on an output, for the report.

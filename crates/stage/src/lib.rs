@@ -18,6 +18,11 @@
 //!   swapped in when every key is up; every board write shown to whoever watches
 //!   ([`BoardWrite`]).
 //!
+//! - [`session`]: a song played live on one or more robots ([`session::Session`]: a sender
+//!   thread a robot, one clock, one `Control` for stop, pause, jump, tempo and a conductor),
+//!   a [`session::Snapshot`] of where it stands for any front end, every robot's report and
+//!   note-by-note account at the end.
+//!
 //! Errors are [`SourceError`] (a tempo source: bad input, named, or the I/O failure behind
 //! it) and [`LiveError`] (the live loop).
 //!
@@ -29,6 +34,7 @@
 
 pub mod framer;
 pub mod live;
+pub mod session;
 pub mod sources;
 pub mod thru;
 

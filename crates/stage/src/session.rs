@@ -1,0 +1,293 @@
+//! A song played live on one or more robots: one sender thread a robot (real-time priority
+//! where the OS allows it), all on one clock and one [`Control`] (stop, pause, jump, tempo,
+//! and a conductor through it), with a [`Snapshot`] of where the performance stands for any
+//! front end to show, and every robot's [`Played`] (report and note-by-note account) at the
+//! end.
+
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::Instant;
+
+use orch_io::{Channels, OutSpec, OutStats, Output};
+use orch_perform::{
+    perform, realtime, song_events, Control, Link, Live, PerformError, Played, ScoreEvent, Setup,
+};
+use orch_seq::Song;
+
+use crate::LiveError;
+
+/// One robot of a session: where it plays and how it is set up.
+pub struct Lane {
+    /// The output as given (`sim`, `serial:…`, `i2c:…`, with its channels).
+    pub spec: OutSpec,
+    /// The performance's setup for it (its link: a DIN line or direct).
+    pub setup: Setup,
+    /// The output, or `None` for the virtual robot alone.
+    pub out: Option<Output>,
+}
+
+/// Opens every output in `specs`: one robot (a lane) each, set up as `setup` with its link.
+pub fn open_lanes(specs: Vec<OutSpec>, setup: &Setup) -> Result<Vec<Lane>, LiveError> {
+    let mut lanes = Vec::new();
+    for spec in specs {
+        let setup = Setup {
+            link: if spec.is_din() {
+                Link::Din
+            } else {
+                Link::Direct
+            },
+            ..setup.clone()
+        };
+        let out = Output::open(
+            &spec.target,
+            &setup.config,
+            &setup.sim.kinds,
+            setup.sim.pwm_hz,
+        )
+        .map_err(|e| LiveError::BadInput(format!("--out {}: {e}", spec.text)))?;
+        lanes.push(Lane { spec, setup, out });
+    }
+    Ok(lanes)
+}
+
+/// The song's events for a robot that takes `channels`, and its notes.
+pub fn lane_events(song: &Song, channels: Channels) -> (Vec<ScoreEvent>, usize) {
+    if channels == Channels::ALL {
+        return (song_events(song).collect(), song.notes());
+    }
+    let events: Vec<_> = song_events(song)
+        .filter(|e| channels.passes(&e.bytes))
+        .collect();
+    let notes = events
+        .iter()
+        .filter(|e| e.bytes.note_on().is_some())
+        .count();
+    (events, notes)
+}
+
+/// Where a live session stands: every robot's keys together, where the first robot is in the
+/// song.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Snapshot {
+    /// The MIDI note of the lowest key.
+    pub low_note: u8,
+    /// Whether each key is down on any robot.
+    pub keys_down: Vec<bool>,
+    /// The bar and beat playing, counted from 1 by the song's time signatures.
+    pub bar: u32,
+    /// The beat in the bar.
+    pub beat: u32,
+    /// The tempo now, quarter notes a minute (the song's, times the tempo factor).
+    pub bpm: f64,
+    /// Seconds of the song played, at the tempo played.
+    pub elapsed_s: f64,
+    /// The song's length at the tempo it started at, seconds.
+    pub total_s: f64,
+    /// Notes sent so far, every robot's.
+    pub notes_sent: u64,
+    /// The notes there are to send, every robot's.
+    pub notes: u64,
+}
+
+type LaneResult = Result<(Played, Option<OutStats>), PerformError>;
+
+/// A robot's sender thread, with where it stands.
+struct Sender {
+    spec: OutSpec,
+    thread: JoinHandle<(realtime::Priority, LaneResult)>,
+    live: Arc<Mutex<Option<Live>>>,
+}
+
+/// Stops every robot when the thread it lives on panics (its output, dropped on the way, has
+/// let go of its keys).
+struct StopOnPanic(Arc<Control>);
+
+impl Drop for StopOnPanic {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.stop();
+        }
+    }
+}
+
+/// One robot's end of a session.
+pub struct Ended {
+    /// Its output.
+    pub spec: OutSpec,
+    /// The performance: its report and its account.
+    pub played: Played,
+    /// What happened on its output (none for the virtual robot alone).
+    pub stats: Option<OutStats>,
+}
+
+/// How a session ended for its robots.
+pub struct Finished {
+    /// Every robot that played to its end (or was stopped), in lane order.
+    pub ended: Vec<Ended>,
+    /// The first robot that failed, if any: its output and why.
+    pub failed: Option<(OutSpec, SessionFailure)>,
+    /// Whether the OS refused real-time priority to a sender (its messages may then be late
+    /// under load; the report's lateness says).
+    pub priority_refused: bool,
+}
+
+/// Why a robot's performance failed.
+#[derive(Debug)]
+pub enum SessionFailure {
+    /// Its performance stopped with an error (its output failed).
+    Performance(PerformError),
+    /// Its sender thread panicked (its keys were released on the way).
+    Panicked,
+}
+
+impl std::fmt::Display for SessionFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SessionFailure::Performance(e) => write!(f, "{e}"),
+            SessionFailure::Panicked => {
+                f.write_str("its sender thread panicked (its keys were released)")
+            }
+        }
+    }
+}
+
+/// A song playing live on its robots. See the [module notes](self).
+pub struct Session {
+    control: Arc<Control>,
+    song: Arc<Song>,
+    senders: Vec<Sender>,
+    low_note: u8,
+    total_s: f64,
+    notes: u64,
+}
+
+impl Session {
+    /// Starts `song` on every lane, steered by `control`, on a clock whose zero is `origin`
+    /// (a conductor's cues are timed on it). A jump asked of `control` before the start
+    /// (`--from`) is taken before the first note.
+    pub fn start(song: Song, lanes: Vec<Lane>, control: Arc<Control>, origin: Instant) -> Self {
+        let song = Arc::new(song);
+        let (low_note, tempo) = lanes.first().map_or((0, 1.0), |l| {
+            (l.setup.config.range.low().get(), l.setup.tempo.get())
+        });
+        let mut senders = Vec::new();
+        let mut notes_total = 0u64;
+        for lane in lanes {
+            let Lane {
+                spec,
+                setup,
+                mut out,
+            } = lane;
+            let (events, notes) = lane_events(&song, spec.channels);
+            notes_total += notes as u64;
+            let live: Arc<Mutex<Option<Live>>> = Arc::new(Mutex::new(None));
+            let (control, live_in) = (Arc::clone(&control), Arc::clone(&live));
+            let thread = realtime::spawn(move || -> LaneResult {
+                let _guard = StopOnPanic(Arc::clone(&control));
+                let mut clock = realtime::PreciseClock::starting_at(origin);
+                let mut on_live = |l: &Live| {
+                    *live_in.lock().unwrap_or_else(|e| e.into_inner()) = Some(l.clone());
+                };
+                let played = perform::<_, Output>(
+                    &setup,
+                    events.into_iter(),
+                    notes,
+                    out.as_mut(),
+                    &mut clock,
+                    Some(&control),
+                    Some(&mut on_live),
+                )?;
+                Ok((played, out.as_ref().map(Output::stats)))
+            });
+            senders.push(Sender { spec, thread, live });
+        }
+        Self {
+            total_s: song.duration_us() as f64 / 1e6 / tempo,
+            control,
+            song,
+            senders,
+            low_note,
+            notes: notes_total,
+        }
+    }
+
+    /// The control every robot follows: stop, pause, resume, jump, tempo.
+    pub fn control(&self) -> &Arc<Control> {
+        &self.control
+    }
+
+    /// The song.
+    pub fn song(&self) -> &Song {
+        &self.song
+    }
+
+    /// Whether every robot has finished (played to the end, or stopped).
+    pub fn is_finished(&self) -> bool {
+        self.senders.iter().all(|s| s.thread.is_finished())
+    }
+
+    /// Where the performance stands now (none before the first robot has said).
+    pub fn snapshot(&self) -> Option<Snapshot> {
+        let mut all: Option<Live> = None;
+        let mut sent = 0;
+        for s in &self.senders {
+            let Some(l) = s.live.lock().unwrap_or_else(|e| e.into_inner()).clone() else {
+                continue;
+            };
+            sent += l.notes_sent;
+            match all.as_mut() {
+                None => all = Some(l),
+                Some(a) => {
+                    for (d, k) in a.keys_down.iter_mut().zip(&l.keys_down) {
+                        *d |= *k;
+                    }
+                }
+            }
+        }
+        let l = all?;
+        let (bar, beat) = self.song.bar_beat(l.song_us);
+        Some(Snapshot {
+            low_note: self.low_note,
+            keys_down: l.keys_down,
+            bar,
+            beat,
+            bpm: self.song.tempo_at(l.song_us).bpm() * l.tempo,
+            elapsed_s: l.song_us as f64 / 1e6 / l.tempo,
+            total_s: self.total_s,
+            notes_sent: sent,
+            notes: self.notes,
+        })
+    }
+
+    /// Waits for every robot to end and gives each one's performance.
+    pub fn finish(self) -> Finished {
+        let mut finished = Finished {
+            ended: Vec::new(),
+            failed: None,
+            priority_refused: false,
+        };
+        for s in self.senders {
+            match s.thread.join() {
+                Ok((priority, Ok((played, stats)))) => {
+                    finished.priority_refused |= priority != realtime::Priority::Realtime;
+                    finished.ended.push(Ended {
+                        spec: s.spec,
+                        played,
+                        stats,
+                    });
+                }
+                Ok((_, Err(e))) => {
+                    finished
+                        .failed
+                        .get_or_insert((s.spec, SessionFailure::Performance(e)));
+                }
+                Err(_) => {
+                    finished
+                        .failed
+                        .get_or_insert((s.spec, SessionFailure::Panicked));
+                }
+            }
+        }
+        finished
+    }
+}

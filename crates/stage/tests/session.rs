@@ -1,0 +1,112 @@
+//! A live session's public face: a short song on the virtual robot in real time, watched
+//! through its snapshots, ended with every robot's performance; and stopped half-way from
+//! another thread, every key released and the rest of the notes accounted as stopped.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use orch_io::OutSpec;
+use orch_perform::{Control, Link, Setup, Tempo};
+use orch_robot::Robot;
+use orch_seq::Song;
+use orch_stage::session::{open_lanes, Session};
+
+#[path = "../../../tests/support/smf.rs"]
+mod smf;
+
+fn setup() -> Setup {
+    let robot = Robot::thesis();
+    Setup {
+        config: robot.config,
+        sim: orch_sim::SimConfig {
+            keep: orch_sim::Keep::Presses,
+            ..robot.sim_config()
+        },
+        compensation: true,
+        tempo: Tempo::NORMAL,
+        link: Link::Direct,
+    }
+}
+
+/// 8 quarter notes at 480 BPM: 1 s.
+fn song() -> Song {
+    Song::parse(&smf::quarters_smf(8, 480.0)).unwrap()
+}
+
+#[test]
+fn a_session_plays_its_song_shows_where_it_stands_and_ends_with_the_report() {
+    let lanes = open_lanes(vec![OutSpec::parse("sim").unwrap()], &setup()).unwrap();
+    let session = Session::start(song(), lanes, Control::new(), Instant::now());
+    let mut seen_down = false;
+    let mut last_sent = 0;
+    let t0 = Instant::now();
+    while !session.is_finished() {
+        assert!(t0.elapsed() < Duration::from_secs(20), "never finished");
+        if let Some(s) = session.snapshot() {
+            seen_down |= s.keys_down.iter().any(|d| *d);
+            assert!(s.notes_sent >= last_sent, "notes sent never go back");
+            last_sent = s.notes_sent;
+            assert_eq!(s.notes, 8);
+            assert_eq!(s.low_note, 36);
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert!(seen_down, "a key was seen down");
+    let finished = session.finish();
+    assert!(finished.failed.is_none());
+    assert_eq!(finished.ended.len(), 1);
+    let report = finished.ended[0].played.report(None);
+    assert!(report.adds_up());
+    assert_eq!(report.outcomes.on_time, 8, "{report:?}");
+}
+
+#[test]
+fn a_session_stopped_from_another_thread_releases_every_key() {
+    let lanes = open_lanes(vec![OutSpec::parse("sim").unwrap()], &setup()).unwrap();
+    let control = Control::new();
+    let session = Session::start(
+        Song::parse(&smf::quarters_smf(40, 120.0)).unwrap(),
+        lanes,
+        Arc::clone(&control),
+        Instant::now(),
+    );
+    let stopper = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_millis(1_200));
+        control.stop();
+    });
+    let t0 = Instant::now();
+    while !session.is_finished() {
+        assert!(t0.elapsed() < Duration::from_secs(20), "never stopped");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    stopper.join().unwrap();
+    assert!(
+        t0.elapsed() < Duration::from_secs(10),
+        "stopped long before its 20 s end"
+    );
+    let finished = session.finish();
+    let played = &finished.ended[0].played;
+    assert!(played.stopped);
+    let report = played.report(None);
+    assert!(report.adds_up());
+    assert!(report.outcomes.dropped.stopped > 20, "{report:?}");
+    assert_eq!(
+        played.performance.summary.mechanics.stuck_at_end, 0,
+        "every key released"
+    );
+}
+
+#[test]
+fn a_bad_output_is_bad_input_in_words() {
+    let Err(e) = open_lanes(
+        vec![OutSpec::parse("serial:/nonexistent/tty").unwrap()],
+        &setup(),
+    ) else {
+        panic!("opened a missing serial port");
+    };
+    assert!(
+        e.to_string().contains("--out serial:/nonexistent/tty"),
+        "{e}"
+    );
+    assert!(matches!(e, orch_stage::LiveError::BadInput(_)));
+}
