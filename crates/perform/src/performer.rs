@@ -309,6 +309,9 @@ pub struct Live {
     pub tempo: f64,
     /// Paused ([`Control::pause`]).
     pub paused: bool,
+    /// The interpreter's counters so far (the guard's among them: keys cut by the hold
+    /// limit, the duty limit and the watchdog, notes refused by the power budget).
+    pub stats: Stats,
 }
 
 /// What went wrong in a performance.
@@ -664,6 +667,7 @@ where
                             notes_sent,
                             tempo: planner.time_map().tempo().get(),
                             paused: true,
+                            stats: *robot.interpreter().stats(),
                         });
                     }
                     let now = clock.now_us().max(at);
@@ -698,6 +702,7 @@ where
                     notes_sent,
                     tempo: planner.time_map().tempo().get(),
                     paused: false,
+                    stats: *robot.interpreter().stats(),
                 });
             }
             if stop {

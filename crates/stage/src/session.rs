@@ -4,9 +4,11 @@
 //! front end to show, and every robot's [`Played`] (report and note-by-note account) at the
 //! end.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, Receiver, Sender as Tx};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use orch_io::{Channels, OutSpec, OutStats, Output};
 use orch_perform::{
@@ -87,15 +89,87 @@ pub struct Snapshot {
     pub notes_sent: u64,
     /// The notes there are to send, every robot's.
     pub notes: u64,
+    /// The tempo factor (1.0: as written).
+    pub tempo: f64,
+    /// Paused.
+    pub paused: bool,
+    /// The first robot's interpreter counters: the guard's among them (keys cut by the hold
+    /// limit, the duty limit, the watchdog; notes refused by the power budget).
+    pub stats: orch_core::Stats,
 }
+
+/// How often a session's watcher looks for a change to tell its viewers: 30 times a second.
+pub const WATCH_EVERY: Duration = Duration::from_millis(33);
 
 type LaneResult = Result<(Played, Option<OutStats>), PerformError>;
 
-/// A robot's sender thread, with where it stands.
+/// A robot's sender thread.
 struct Sender {
     spec: OutSpec,
     thread: JoinHandle<(realtime::Priority, LaneResult)>,
-    live: Arc<Mutex<Option<Live>>>,
+}
+
+/// Where every robot stands, as each sender last said, and the viewers to tell.
+struct Watch {
+    song: Arc<Song>,
+    lives: Vec<Arc<Mutex<Option<Live>>>>,
+    low_note: u8,
+    total_s: f64,
+    notes: u64,
+    viewers: Mutex<Vec<Tx<Snapshot>>>,
+    /// The last snapshot told.
+    last: Mutex<Option<Snapshot>>,
+}
+
+impl Watch {
+    fn snapshot(&self) -> Option<Snapshot> {
+        let mut all: Option<Live> = None;
+        let mut sent = 0;
+        for live in &self.lives {
+            let Some(l) = live.lock().unwrap_or_else(|e| e.into_inner()).clone() else {
+                continue;
+            };
+            sent += l.notes_sent;
+            match all.as_mut() {
+                None => all = Some(l),
+                Some(a) => {
+                    for (d, k) in a.keys_down.iter_mut().zip(&l.keys_down) {
+                        *d |= *k;
+                    }
+                }
+            }
+        }
+        let l = all?;
+        let (bar, beat) = self.song.bar_beat(l.song_us);
+        Some(Snapshot {
+            low_note: self.low_note,
+            keys_down: l.keys_down,
+            bar,
+            beat,
+            bpm: self.song.tempo_at(l.song_us).bpm() * l.tempo,
+            elapsed_s: l.song_us as f64 / 1e6 / l.tempo,
+            total_s: self.total_s,
+            notes_sent: sent,
+            notes: self.notes,
+            tempo: l.tempo,
+            paused: l.paused,
+            stats: l.stats,
+        })
+    }
+
+    /// Tells every viewer the snapshot if it changed; forgets viewers that went away.
+    fn tell(&self) {
+        let Some(now) = self.snapshot() else { return };
+        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
+        if last.as_ref() == Some(&now) {
+            return;
+        }
+        self.viewers
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .retain(|v| v.send(now.clone()).is_ok());
+        *last = Some(now);
+    }
 }
 
 /// Stops every robot when the thread it lives on panics (its output, dropped on the way, has
@@ -154,11 +228,11 @@ impl std::fmt::Display for SessionFailure {
 /// A song playing live on its robots. See the [module notes](self).
 pub struct Session {
     control: Arc<Control>,
-    song: Arc<Song>,
     senders: Vec<Sender>,
-    low_note: u8,
-    total_s: f64,
-    notes: u64,
+    watch: Arc<Watch>,
+    /// Set when every robot has ended: the watcher tells a last time and ends.
+    done: Arc<AtomicBool>,
+    watcher: Option<JoinHandle<()>>,
 }
 
 impl Session {
@@ -171,6 +245,7 @@ impl Session {
             (l.setup.config.range.low().get(), l.setup.tempo.get())
         });
         let mut senders = Vec::new();
+        let mut lives = Vec::new();
         let mut notes_total = 0u64;
         for lane in lanes {
             let Lane {
@@ -199,16 +274,60 @@ impl Session {
                 )?;
                 Ok((played, out.as_ref().map(Output::stats)))
             });
-            senders.push(Sender { spec, thread, live });
+            senders.push(Sender { spec, thread });
+            lives.push(live);
         }
-        Self {
+        let watch = Arc::new(Watch {
             total_s: song.duration_us() as f64 / 1e6 / tempo,
-            control,
             song,
-            senders,
+            lives,
             low_note,
             notes: notes_total,
+            viewers: Mutex::new(Vec::new()),
+            last: Mutex::new(None),
+        });
+        let done = Arc::new(AtomicBool::new(false));
+        let watcher = {
+            let (watch, done) = (Arc::clone(&watch), Arc::clone(&done));
+            std::thread::Builder::new()
+                .name("orch-session-watch".into())
+                .spawn(move || {
+                    while !done.load(Ordering::SeqCst) {
+                        watch.tell();
+                        std::thread::sleep(WATCH_EVERY);
+                    }
+                    watch.tell();
+                })
+                .ok()
+        };
+        Self {
+            control,
+            senders,
+            watch,
+            done,
+            watcher,
         }
+    }
+
+    /// A new viewer: it gets the snapshot as it stands now (if the performance has begun),
+    /// then each change, at most 30 times a second ([`WATCH_EVERY`]). Any number of viewers
+    /// may watch; one that goes away (drops its receiver) is forgotten. The channel closes when
+    /// the session has finished.
+    pub fn subscribe(&self) -> Receiver<Snapshot> {
+        let (tx, rx) = mpsc::channel();
+        // Under the lock that the watcher tells under: the viewer misses no change between
+        // the snapshot it is given and the next one told.
+        let last = self.watch.last.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(s) = last.clone().or_else(|| self.watch.snapshot()) {
+            let _ = tx.send(s);
+        }
+        self.watch
+            .viewers
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(tx);
+        drop(last);
+        rx
     }
 
     /// The control every robot follows: stop, pause, resume, jump, tempo.
@@ -218,7 +337,7 @@ impl Session {
 
     /// The song.
     pub fn song(&self) -> &Song {
-        &self.song
+        &self.watch.song
     }
 
     /// Whether every robot has finished (played to the end, or stopped).
@@ -228,45 +347,17 @@ impl Session {
 
     /// Where the performance stands now (none before the first robot has said).
     pub fn snapshot(&self) -> Option<Snapshot> {
-        let mut all: Option<Live> = None;
-        let mut sent = 0;
-        for s in &self.senders {
-            let Some(l) = s.live.lock().unwrap_or_else(|e| e.into_inner()).clone() else {
-                continue;
-            };
-            sent += l.notes_sent;
-            match all.as_mut() {
-                None => all = Some(l),
-                Some(a) => {
-                    for (d, k) in a.keys_down.iter_mut().zip(&l.keys_down) {
-                        *d |= *k;
-                    }
-                }
-            }
-        }
-        let l = all?;
-        let (bar, beat) = self.song.bar_beat(l.song_us);
-        Some(Snapshot {
-            low_note: self.low_note,
-            keys_down: l.keys_down,
-            bar,
-            beat,
-            bpm: self.song.tempo_at(l.song_us).bpm() * l.tempo,
-            elapsed_s: l.song_us as f64 / 1e6 / l.tempo,
-            total_s: self.total_s,
-            notes_sent: sent,
-            notes: self.notes,
-        })
+        self.watch.snapshot()
     }
 
     /// Waits for every robot to end and gives each one's performance.
-    pub fn finish(self) -> Finished {
+    pub fn finish(mut self) -> Finished {
         let mut finished = Finished {
             ended: Vec::new(),
             failed: None,
             priority_refused: false,
         };
-        for s in self.senders {
+        for s in std::mem::take(&mut self.senders) {
             match s.thread.join() {
                 Ok((priority, Ok((played, stats)))) => {
                     finished.priority_refused |= priority != realtime::Priority::Realtime;
@@ -288,6 +379,26 @@ impl Session {
                 }
             }
         }
+        self.end_watch();
         finished
+    }
+
+    /// Ends the watcher: it tells a last time, then every viewer's channel closes.
+    fn end_watch(&mut self) {
+        self.done.store(true, Ordering::SeqCst);
+        if let Some(w) = self.watcher.take() {
+            let _ = w.join();
+        }
+        self.watch
+            .viewers
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clear();
+    }
+}
+
+impl Drop for Session {
+    fn drop(&mut self) {
+        self.end_watch();
     }
 }

@@ -110,3 +110,88 @@ fn a_bad_output_is_bad_input_in_words() {
     );
     assert!(matches!(e, orch_stage::LiveError::BadInput(_)));
 }
+
+#[test]
+fn viewers_get_the_snapshot_when_they_subscribe_then_each_change_and_a_close_at_the_end() {
+    let lanes = open_lanes(vec![OutSpec::parse("sim").unwrap()], &setup()).unwrap();
+    let control = Control::new();
+    let session = Session::start(
+        Song::parse(&smf::quarters_smf(16, 480.0)).unwrap(),
+        lanes,
+        Arc::clone(&control),
+        Instant::now(),
+    );
+    let early = session.subscribe();
+    std::thread::sleep(Duration::from_millis(900));
+    // Paused, nothing changes: what a viewer subscribing now gets is the snapshot it is
+    // given on subscribing, not a change.
+    control.pause();
+    std::thread::sleep(Duration::from_millis(200));
+    let late = session.subscribe();
+    let first = late
+        .recv_timeout(Duration::from_millis(150))
+        .expect("a snapshot on subscribing");
+    assert!(first.notes_sent > 0 && first.paused, "{first:?}");
+    control.resume();
+    let t0 = Instant::now();
+    while !session.is_finished() {
+        assert!(t0.elapsed() < Duration::from_secs(20));
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let finished = session.finish();
+    assert!(finished.failed.is_none());
+    // Both saw the performance to its end, each change once, and then the channel closed.
+    let early: Vec<_> = early.iter().collect();
+    let late: Vec<_> = late.iter().collect();
+    assert!(early.len() > 10, "{} snapshots", early.len());
+    assert_eq!(early.last(), late.last());
+    assert_eq!(early.last().unwrap().notes_sent, 16);
+    for w in early.windows(2) {
+        assert_ne!(w[0], w[1], "a snapshot is told only when it changed");
+    }
+}
+
+#[test]
+fn pause_tempo_and_jumps_from_two_threads_at_once_leave_an_account_that_adds_up() {
+    let lanes = open_lanes(vec![OutSpec::parse("sim").unwrap()], &setup()).unwrap();
+    let control = Control::new();
+    let song = Song::parse(&smf::quarters_smf(24, 240.0)).unwrap();
+    let bar_3 = song.time_at_tick(8 * 480);
+    let session = Session::start(song, lanes, Arc::clone(&control), Instant::now());
+    let a = {
+        let c = Arc::clone(&control);
+        std::thread::spawn(move || {
+            for _ in 0..3 {
+                std::thread::sleep(Duration::from_millis(300));
+                c.pause();
+                std::thread::sleep(Duration::from_millis(100));
+                c.resume();
+            }
+        })
+    };
+    let b = {
+        let c = Arc::clone(&control);
+        std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(250));
+            c.set_tempo(Tempo::new(1.5).unwrap());
+            std::thread::sleep(Duration::from_millis(300));
+            c.jump_to(bar_3);
+            std::thread::sleep(Duration::from_millis(300));
+            c.jump_to(0);
+        })
+    };
+    let viewer = session.subscribe();
+    let t0 = Instant::now();
+    while !session.is_finished() {
+        assert!(t0.elapsed() < Duration::from_secs(30), "never finished");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    a.join().unwrap();
+    b.join().unwrap();
+    let finished = session.finish();
+    let played = &finished.ended[0].played;
+    let report = played.report(None);
+    assert!(report.adds_up(), "{report:?}");
+    assert_eq!(report.jumps, 2, "{report:?}");
+    assert!(viewer.iter().any(|s| s.paused), "a viewer saw the pause");
+}
