@@ -66,6 +66,7 @@
 //! No Cargo features.
 
 pub mod analyze;
+mod envelope;
 mod error;
 pub mod fit;
 mod listen;

@@ -34,6 +34,7 @@
 //!   onset, in dB (mean-square, full scale = 0 dB for a full-scale sine's... 0 dB = 1.0²).
 
 use crate::onset::{median, robust_sigma};
+use crate::envelope::Demod;
 use crate::spectrum::{KeyBand, Stft};
 
 /// The detection function's lag, ms.
@@ -62,6 +63,7 @@ pub(crate) struct Heard {
 pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec<Heard> {
     let band = KeyBand::new(note, rate);
     let mut stft = Stft::new(band.n);
+    let mut demod = Demod::new(note, rate);
     let mut p = Vec::new();
     let per_ms = f64::from(rate) / 1000.0;
     let sample = |ms: f64| (ms * per_ms).round() as i64;
@@ -119,6 +121,10 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
                 string.push(band.string_power(&p));
             }
             let t_of = |i: usize| start + i as f64;
+            let env_start = sample(e - 250.0);
+            let env = demod.envelope(x, env_start);
+            let env_t = |k: usize| (env_start + (k * demod.step) as i64) as f64 / per_ms;
+            let env_k = |t: f64| ((t * per_ms - env_start as f64) / demod.step as f64).max(0.0);
             let l = LAG_MS as usize;
             let flux: Vec<f64> = (0..count)
                 .map(|i| if i < l { 0.0 } else { flux_of(&logs[i], &logs[i - l]) })
@@ -176,7 +182,8 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
                 }
                 let (a, b) = (string[j - 1], string[j]);
                 let frac = if b > a { (half - a) / (b - a) } else { 0.0 };
-                let t = t_of(j - 1) + frac.clamp(0.0, 1.0);
+                let t_half = t_of(j - 1) + frac.clamp(0.0, 1.0);
+                let t = time_onset(&env, env_k, env_t, t_half).unwrap_or(t_half);
                 if level_db.is_none() {
                     let from = (t + half_ms).ceil() as usize;
                     let lo = ((from as f64 - start).max(0.0)) as usize;
@@ -192,4 +199,38 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
             }
         })
         .collect()
+}
+
+/// The onset on the envelope near `guess` (ms): where it crosses half-way from its level
+/// before (the median 150 to 60 ms before `guess`) to its peak (within 10 ms before to 60 ms
+/// after), linearly interpolated.
+fn time_onset(
+    env: &[f64],
+    k_of: impl Fn(f64) -> f64,
+    t_of: impl Fn(usize) -> f64,
+    guess: f64,
+) -> Option<f64> {
+    let last = env.len().checked_sub(1)?;
+    let at = |t: f64| (k_of(t).round() as usize).min(last);
+    let (pre_lo, pre_hi) = (at(guess - 150.0), at(guess - 60.0));
+    let mut pre: Vec<f64> = env[pre_lo..=pre_hi].to_vec();
+    let pre = median(&mut pre);
+    let (lo, hi) = (at(guess - 10.0), at(guess + 60.0));
+    let (peak_k, peak) = (lo..=hi)
+        .map(|k| (k, env[k]))
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    if peak <= pre {
+        return None;
+    }
+    let half = pre + 0.5 * (peak - pre);
+    let mut k = peak_k;
+    while k > pre_hi && env[k - 1] > half {
+        k -= 1;
+    }
+    if k == 0 || k <= pre_hi {
+        return None;
+    }
+    let (a, b) = (env[k - 1], env[k]);
+    let frac = if b > a { (half - a) / (b - a) } else { 0.0 };
+    Some(t_of(k - 1) + frac.clamp(0.0, 1.0) * (t_of(k) - t_of(k - 1)))
 }

@@ -72,8 +72,8 @@ pub(crate) struct KeyBand {
 /// The highest partial frequency looked at: above it a string has little energy left and a
 /// room's noise and clicks have plenty.
 const TOP_HZ: f64 = 8000.0;
-/// The most partials looked at.
-const PARTIALS: u32 = 12;
+/// The most partials looked at (those below 8 kHz).
+const PARTIALS: u32 = 16;
 
 impl KeyBand {
     /// The bins of MIDI note `note` at `rate`. The frame is long enough to put 4 bins
@@ -81,10 +81,17 @@ impl KeyBand {
     /// 23 ms from about G3 up.
     pub(crate) fn new(note: u8, rate: u32) -> Self {
         let f0 = 440.0 * 2f64.powf((f64::from(note) - 69.0) / 12.0);
-        let rate_f = f64::from(rate);
-        let n = ((4.0 * rate_f / f0).ceil() as usize)
+        let n = ((4.0 * f64::from(rate) / f0).ceil() as usize)
             .next_power_of_two()
             .clamp(1024, 8192);
+        Self::with_len(note, rate, n, 0.0)
+    }
+
+    /// The bins of MIDI note `note` at `rate` in frames of `n` samples, partials from
+    /// `min_hz` up.
+    pub(crate) fn with_len(note: u8, rate: u32, n: usize, min_hz: f64) -> Self {
+        let f0 = 440.0 * 2f64.powf((f64::from(note) - 69.0) / 12.0);
+        let rate_f = f64::from(rate);
         let bin = rate_f / n as f64;
         let top = TOP_HZ.min(0.45 * rate_f);
         let bins = n / 2 + 1;
@@ -94,6 +101,9 @@ impl KeyBand {
             let f = f0 * f64::from(h);
             if f > top {
                 break;
+            }
+            if f < min_hz {
+                continue;
             }
             // A piano's partials run sharp (inharmonicity): up to about 1 % at the 12th.
             let lo = ((f * 0.995 / bin).round() as usize).saturating_sub(1);

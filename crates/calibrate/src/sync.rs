@@ -4,7 +4,8 @@
 //! must then have onsets at their own times (±50 ms: the figure's keys differ in press
 //! delay by up to a few tens of ms), and the figure's span must hold no other onset. This is
 //! the cross-correlation of the onset train with the figure's pattern, scored by hits and
-//! misses. The best shift is kept (most strikes found, then fewest strangers, then the
+//! misses (an onset under half the figure's weakest strike is a ripple of its decay or a damper,
+//! not a stranger). The best shift is kept (most strikes found, then fewest strangers, then the
 //! smallest timing error, then the earliest); at least 4 of its 5 strikes must be there and
 //! at most one stranger, or the figure is not in the recording.
 
@@ -13,6 +14,9 @@ use crate::score::{LEAD_IN_MS, SYNC_MARKS_MS};
 
 /// How far a figure strike's onset may be from its place, s.
 const TOLERANCE_S: f64 = 0.050;
+/// An onset in the figure's span weaker than this share of the figure's weakest strike is
+/// a ripple of its decay or a damper falling, not a stranger.
+const STRANGER: f64 = 0.5;
 /// The fewest figure strikes that count as the figure.
 pub(crate) const MIN_HITS: usize = 4;
 
@@ -36,6 +40,7 @@ pub(crate) fn find(onsets: &[Onset]) -> Result<Found, usize> {
         let mut err = 0.0;
         let mut used = Vec::new();
         let mut sum = 0.0;
+        let mut weakest = f64::INFINITY;
         for &m in &marks {
             let want = t0 + m;
             let near = onsets[i..]
@@ -48,6 +53,7 @@ pub(crate) fn find(onsets: &[Onset]) -> Result<Found, usize> {
                 err += (o.t_s - want).powi(2);
                 used.push(i + j);
                 sum += o.t_s - m;
+                weakest = weakest.min(o.flux);
             }
         }
         most = most.max(hits);
@@ -55,7 +61,10 @@ pub(crate) fn find(onsets: &[Onset]) -> Result<Found, usize> {
             .iter()
             .enumerate()
             .filter(|(j, o)| {
-                o.t_s > t0 - 0.1 && o.t_s < t0 + span + 0.1 && !used.contains(j)
+                o.t_s > t0 - 0.1
+                    && o.t_s < t0 + span + 0.1
+                    && !used.contains(j)
+                    && o.flux >= STRANGER * weakest
             })
             .count();
         if hits < MIN_HITS || strangers > 1 {
