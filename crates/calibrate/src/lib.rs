@@ -43,7 +43,7 @@
 //!   loudness about 4).
 //! - **Reverberation**: the detection function only counts rises, and each strike has a
 //!   second to itself (the damper stops the string 175 ms after the press; the room's tail
-//!   has died 60 dB in 0.6 s); an echo's ripple in the flux is ignored under 30 % of the
+//!   has died 60 dB in 0.6 s); an echo's ripple in the flux is ignored under 15 % of the
 //!   onset's peak.
 //! - **A mechanical thump before the string**: a click is broadband, so it raises the bins
 //!   between the partials as much as the partials: the string power ignores it, an onset it

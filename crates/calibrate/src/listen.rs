@@ -19,7 +19,7 @@
 //!   reverberation. Their flux's median plus 6 robust standard deviations (1.4826 × MAD) is
 //!   the key's threshold: it rises with the noise.
 //! - **Peaks**: the flux's maxima within ±10 ms above the threshold; maxima closer than the
-//!   frame (or 50 ms) are one onset; a peak below 30 % of the window's largest is a ripple
+//!   frame (or 50 ms) are one onset; a peak below 15 % of the window's largest is a ripple
 //!   (an echo, a beat between partials), not an onset.
 //! - **The string**: the key's *string power*, the partials' bins' power less as many times
 //!   the between bins' mean power (broadband noise, a mechanical thump, a click add to both
@@ -44,7 +44,7 @@ const FLUX_LAMBDA: f64 = 6.0;
 /// Robust standard deviations of the string power an onset must add.
 const STRING_LAMBDA: f64 = 8.0;
 /// A peak this share of the window's largest, or more, is an onset of its own.
-const RIPPLE: f64 = 0.3;
+const RIPPLE: f64 = 0.15;
 /// Listening window around the expected onset, ms.
 pub(crate) const BEFORE_MS: i64 = 150;
 /// Listening window after the expected onset, ms.
