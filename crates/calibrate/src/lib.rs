@@ -30,9 +30,10 @@
 //! Within each strike's window the same flux is computed on the struck key's partials only
 //! (a comb of bins), every 1 ms, with a threshold from the key's own noise frames; an onset
 //! must also raise the key's *string power* (the partials' power less the power between
-//! them) well above its noise. The onset is timed where the string power crosses half-way
-//! to its peak; the level is the string power over the next 50 ms. Every parameter, and
-//! why, is in the `listen` module's source notes.
+//! them) well above its noise. The onset is timed on the partials' analytic envelopes
+//! (each partial's band through a zero-phase filter: no phase ripple), where their sum
+//! crosses half-way to its peak; the level is the string power over the 50 ms after it.
+//! Every parameter, and why, is in the `listen` and `envelope` modules' source notes.
 //!
 //! # Real rooms
 //! - **Noise**: every threshold is set from the noise (the recording's flux for the figure;
@@ -45,9 +46,11 @@
 //!   second to itself (the damper stops the string 175 ms after the press; the room's tail
 //!   has died 60 dB in 0.6 s); an echo's ripple in the flux is ignored under 15 % of the
 //!   onset's peak.
-//! - **A mechanical thump before the string**: a click is broadband, so it raises the bins
-//!   between the partials as much as the partials: the string power ignores it, an onset it
-//!   alone makes is dropped, and the timing is the string's. The thump is not measured.
+//! - **A mechanical thump before the string**: a click of a few ms spreads its energy over
+//!   the whole spectrum, so the partials' narrow bands, on whose envelope the onset is timed,
+//!   get little of it next to the string's; its flux peak, a frame or less before the
+//!   string's, merges with it into one onset (the merge is what the thump test guards: with
+//!   it shortened to 5 ms the thump becomes a second onset). The thump is not measured.
 //! - **A neighbour's decay still ringing**: keys are struck in order, a second apart, each
 //!   key's own noise frames (from 450 to 150 ms before each strike) hold whatever still
 //!   rings, so its threshold and string-power baseline include it; the timing crosses

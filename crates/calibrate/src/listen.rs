@@ -25,13 +25,13 @@
 //!   the between bins' mean power (broadband noise, a mechanical thump, a click add to both
 //!   and cancel). An onset counts only if the string power after it rises by at least 8
 //!   robust standard deviations of the noise frames' string power, and to at least 1.5 times
-//!   what it was before: a thump alone, a noise burst or a ripple in a decay does not.
-//! - **Timing**: the frame centre at which the string power crosses half-way from its level
-//!   before the onset to its peak after it (linear interpolation between frames). For a
-//!   symmetric window that is the onset of a step, whatever the loudness and the frame
-//!   length; the analysis' common bias (an attack's rise) cancels against the anchor.
+//!   what it was before: a noise burst or a ripple in a decay does not.
+//! - **Timing**: first where the string power crosses half-way from its level before to its
+//!   peak (±a few ms: a short-time power ripples with the partials' phases), then, near it,
+//!   where the partials' analytic envelope does ([`Demod`]): exact for a step whatever the
+//!   loudness; the common bias (half-way up an attack) cancels against the anchor.
 //! - **Level**: the mean string power of the frames that lie wholly in the 50 ms after the
-//!   onset, in dB (mean-square, full scale = 0 dB for a full-scale sine's... 0 dB = 1.0²).
+//!   onset, in dB (mean-square power; 0 dB is a full-scale square wave).
 
 use crate::onset::{median, robust_sigma};
 use crate::envelope::Demod;

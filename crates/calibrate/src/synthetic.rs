@@ -11,7 +11,7 @@
 //!   phases, each decaying with a time constant from 1.2 s (C2) to about 0.3 s (C7),
 //!   shorter for higher partials; a 3 ms raised-cosine attack; the damper, 25 ms after the
 //!   note's end, stops it with a 40 ms time constant. Optionally a mechanical **thump**: 4 ms
-//!   of decaying white noise 12 ms before the string, at a quarter of the string's amplitude.
+//!   of decaying white noise 12 ms before the string, as loud as the string (its amplitude).
 //! - **The room** ([`Room`]): the capture offset (the recording starts that long before the
 //!   score), an optional **reverberation** (four parallel feedback combs of 29.7, 37.1, 41.1
 //!   and 43.7 ms with a 0.6 s reverberation time, mixed at 30 %: a decaying tail, and echoes
@@ -242,7 +242,7 @@ pub fn record_strikes(
             let t0 = ((onset_ms - 12.0) / 1000.0 * rate).max(0.0) as usize;
             for n in 0..(0.004 * rate) as usize {
                 if let Some(y) = x.get_mut(t0 + n) {
-                    *y += 0.25 * amp * rng.normal() * (-(n as f64) / (0.001 * rate)).exp();
+                    *y += amp * rng.normal() * (-(n as f64) / (0.001 * rate)).exp();
                 }
             }
         }
