@@ -25,8 +25,8 @@ fn robot(path: Option<&Path>) -> anyhow::Result<(Robot, String)> {
     match path {
         Some(p) => {
             let robot = Robot::load(p)?;
-            let text = std::fs::read_to_string(p)
-                .with_context(|| format!("reading {}", p.display()))?;
+            let text =
+                std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
             Ok((robot, text))
         }
         None => Ok((Robot::thesis(), DEFAULT_TOML.to_string())),

@@ -31,7 +31,9 @@ fn calibrate_score_writes_every_key_at_every_level_after_the_sync_figure() {
         .args(["--levels", "3"])
         .assert()
         .success()
-        .stderr(predicates::str::contains("12 keys at 3 levels ([1, 64, 127])"));
+        .stderr(predicates::str::contains(
+            "12 keys at 3 levels ([1, 64, 127])",
+        ));
     let bytes = std::fs::read(d.join("cal.mid")).unwrap();
     let smf = midly::Smf::parse(&bytes).unwrap();
     let ons = smf.tracks[0]
@@ -81,7 +83,10 @@ fn calibrate_wav_prints_a_robot_toml_that_loads_and_json_measurements() {
     for (i, k) in keys.iter().enumerate() {
         let m = calibrated.mechanics.for_key(i as u8);
         let got = m.press_delay.as_micros() as f64 / 1000.0;
-        assert!((got - k.press_delay_ms).abs() < 1.0, "key {i}: {got} vs {k:?}");
+        assert!(
+            (got - k.press_delay_ms).abs() < 1.0,
+            "key {i}: {got} vs {k:?}"
+        );
     }
     assert!(text.contains("pinned by the anchor"), "{text}");
     let out = orch()

@@ -11,7 +11,10 @@ use orch_calibrate::{analyze, robot_toml, Anchor, Score};
 const FLOOR: f64 = 12.0;
 
 fn main() {
-    let seeds: u64 = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(3);
+    let seeds: u64 = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(3);
     let text = orch_robot::default_toml(orch_robot::BoardKind::Pwm);
     let robot = orch_robot::Robot::from_toml(&text).unwrap();
     let score = Score::for_robot(&robot, 4).unwrap();

@@ -30,7 +30,11 @@ impl std::str::FromStr for Anchor {
         };
         let (n, ms) = s.split_once('=').ok_or_else(bad)?;
         let note: u8 = n.trim().parse().map_err(|_| bad())?;
-        let press_delay_ms: f64 = ms.trim().trim_end_matches("ms").parse().map_err(|_| bad())?;
+        let press_delay_ms: f64 = ms
+            .trim()
+            .trim_end_matches("ms")
+            .parse()
+            .map_err(|_| bad())?;
         if note > 127 || !(0.0..=1000.0).contains(&press_delay_ms) {
             return Err(bad());
         }
@@ -134,7 +138,9 @@ pub fn check(rec: &Recording, score: &Score) -> Result<(), CalibrateError> {
     let rms: Vec<f64> = rec
         .samples
         .chunks(rate)
-        .map(|c| (c.iter().map(|&x| f64::from(x) * f64::from(x)).sum::<f64>() / c.len() as f64).sqrt())
+        .map(|c| {
+            (c.iter().map(|&x| f64::from(x) * f64::from(x)).sum::<f64>() / c.len() as f64).sqrt()
+        })
         .collect();
     let loudest = rms.iter().copied().fold(0.0, f64::max);
     let sounding: Vec<usize> = (0..rms.len())
@@ -197,7 +203,10 @@ pub fn analyze(
             .iter()
             .filter(|s| s.part == Part::Key && s.note == note)
             .collect();
-        let expected: Vec<f64> = strikes.iter().map(|s| f64::from(s.at_ms) + offset).collect();
+        let expected: Vec<f64> = strikes
+            .iter()
+            .map(|s| f64::from(s.at_ms) + offset)
+            .collect();
         let heard = listen(&rec.samples, rec.rate, note, &expected);
         let touch = robot.config.dynamics.keys[usize::from(note - low)];
         let file = robot.mechanics.for_key(note - low);
@@ -244,7 +253,11 @@ pub fn analyze(
             .map(|l| l.velocity);
         // Strikes with no sound: below the softest (expected, but said), or above it (a fault).
         for (l, m) in levels.iter().zip(&measured) {
-            if l.press_delay_ms.is_some() || problems.iter().any(|p| p.starts_with(&format!("velocity {}:", l.velocity))) {
+            if l.press_delay_ms.is_some()
+                || problems
+                    .iter()
+                    .any(|p| p.starts_with(&format!("velocity {}:", l.velocity)))
+            {
                 continue;
             }
             match softest_velocity {
@@ -261,7 +274,10 @@ pub fn analyze(
             }
         }
         let fitted = if softest_velocity.is_none() {
-            problems.insert(0, "no sound at any level: the key is not calibrated".to_string());
+            problems.insert(
+                0,
+                "no sound at any level: the key is not calibrated".to_string(),
+            );
             None
         } else {
             // A silent level above a sounding one is a fault, not a bracket: left out.

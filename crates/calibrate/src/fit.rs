@@ -178,7 +178,10 @@ mod tests {
 
     #[test]
     fn one_sounding_level_is_bracketed_and_said() {
-        let m = [level(0.817, 0.9, 10.0, 20.0, 0.0), level(1.0, 0.9, 10.0, 20.0, 0.0)];
+        let m = [
+            level(0.817, 0.9, 10.0, 20.0, 0.0),
+            level(1.0, 0.9, 10.0, 20.0, 0.0),
+        ];
         let (f, remarks) = fit(&m, 15.0).unwrap();
         assert!((f.softest - 0.9085).abs() < 0.001);
         assert_eq!(remarks.len(), 1);

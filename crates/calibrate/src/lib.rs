@@ -40,8 +40,8 @@
 //!   each key's frames before its strikes for the key), so it rises with the room's noise;
 //!   listening on the key's partials alone gains about 15 dB over the whole band. A strike
 //!   whose partials do not rise clearly above the noise in their own bins counts as silence;
-//!   at 30 dB SNR that is about 60 dB below the key's full-power level (velocity-scale
-//!   loudness about 4).
+//!   at 30 dB SNR that is about 55 dB below the key's full-power level (velocity-scale
+//!   loudness about 10).
 //! - **Reverberation**: the detection function only counts rises, and each strike has a
 //!   second to itself (the damper stops the string 175 ms after the press; the room's tail
 //!   has died 60 dB in 0.6 s); an echo's ripple in the flux is ignored under 15 % of the

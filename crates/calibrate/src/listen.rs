@@ -9,7 +9,7 @@
 //! - **Frames**: Hann, long enough to put 4 bins between the key's partials (1024 samples,
 //!   23 ms at 44.1 kHz, from about G3 up; 4096, 93 ms, for C2), one every 1 ms, from 150 ms
 //!   before the expected onset to 300 ms after it.
-//! - **The key's bins**: ±1 bin around each of its first 12 partials below 8 kHz (allowing
+//! - **The key's bins**: ±1 bin around each of its first 16 partials below 8 kHz (allowing
 //!   1 % of inharmonicity), and one bin half-way between each two.
 //! - **Detection function**: spectral flux on the partials' bins, ln(1 + γ|X|) against the
 //!   frame 10 ms before, half-wave rectified, summed (Dixon 2006's SF, restricted to the
@@ -33,8 +33,8 @@
 //! - **Level**: the mean string power of the frames that lie wholly in the 50 ms after the
 //!   onset, in dB (mean-square power; 0 dB is a full-scale square wave).
 
-use crate::onset::{median, robust_sigma};
 use crate::envelope::Demod;
+use crate::onset::{median, robust_sigma};
 use crate::spectrum::{KeyBand, Stft};
 
 /// The detection function's lag, ms.
@@ -92,10 +92,7 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
             .collect()
     };
     let flux_of = |now: &[f64], before: &[f64]| -> f64 {
-        now.iter()
-            .zip(before)
-            .map(|(a, b)| (a - b).max(0.0))
-            .sum()
+        now.iter().zip(before).map(|(a, b)| (a - b).max(0.0)).sum()
     };
     let noise_flux: Vec<f64> = noise_pairs
         .iter()
@@ -127,7 +124,13 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
             let env_k = |t: f64| ((t * per_ms - env_start as f64) / demod.step as f64).max(0.0);
             let l = LAG_MS as usize;
             let flux: Vec<f64> = (0..count)
-                .map(|i| if i < l { 0.0 } else { flux_of(&logs[i], &logs[i - l]) })
+                .map(|i| {
+                    if i < l {
+                        0.0
+                    } else {
+                        flux_of(&logs[i], &logs[i - l])
+                    }
+                })
                 .collect();
             // Peaks in the listening window proper.
             let first = (LAG_MS + 1) as usize;
@@ -138,17 +141,16 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
                         && flux[i.saturating_sub(10)..(i + 11).min(count)]
                             .iter()
                             .enumerate()
-                            .all(|(j, &v)| v < flux[i] || (v == flux[i] && i.saturating_sub(10) + j >= i))
+                            .all(|(j, &v)| {
+                                v < flux[i] || (v == flux[i] && i.saturating_sub(10) + j >= i)
+                            })
                 })
                 .collect();
             // One onset per frame's span: keep the larger of close peaks.
             peaks.sort_by(|&a, &b| flux[b].total_cmp(&flux[a]));
             let mut kept: Vec<usize> = Vec::new();
             for i in peaks {
-                if kept
-                    .iter()
-                    .all(|&k| (t_of(k) - t_of(i)).abs() >= merge_ms)
-                {
+                if kept.iter().all(|&k| (t_of(k) - t_of(i)).abs() >= merge_ms) {
                     kept.push(i);
                 }
             }

@@ -52,7 +52,10 @@ pub(crate) fn broadband(rec: &Recording) -> Vec<Onset> {
     let mut flux = vec![0.0f64; frames];
     let mut prev: Vec<f64> = Vec::new();
     for (f, m) in mags.iter().enumerate() {
-        let cur: Vec<f64> = m.iter().map(|&x| (1.0 + gamma * f64::from(x)).ln()).collect();
+        let cur: Vec<f64> = m
+            .iter()
+            .map(|&x| (1.0 + gamma * f64::from(x)).ln())
+            .collect();
         if f > 0 {
             flux[f] = cur
                 .iter()

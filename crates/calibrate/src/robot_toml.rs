@@ -27,7 +27,11 @@ pub fn calibrated(input: &str, cal: &Calibration) -> Result<String, CalibrateErr
         .map_err(|e| CalibrateError::Internal(format!("the input robot.toml: {e}")))?;
     let low = robot.config.range.low().get();
     let default_hold = |note: u8| {
-        f64::from(robot.config.dynamics.keys[usize::from(note - low)].hold.percent())
+        f64::from(
+            robot.config.dynamics.keys[usize::from(note - low)]
+                .hold
+                .percent(),
+        )
     };
     let section = |doc: &mut Table, name: &str| -> Vec<Table> {
         let t = doc

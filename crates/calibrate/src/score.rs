@@ -213,9 +213,9 @@ mod tests {
     #[test]
     fn sync_figure_intervals_are_all_different() {
         let mut d = Vec::new();
-        for i in 0..SYNC_MARKS_MS.len() {
-            for j in i + 1..SYNC_MARKS_MS.len() {
-                d.push(SYNC_MARKS_MS[j] - SYNC_MARKS_MS[i]);
+        for (i, a) in SYNC_MARKS_MS.iter().enumerate() {
+            for b in &SYNC_MARKS_MS[i + 1..] {
+                d.push(b - a);
             }
         }
         let n = d.len();
@@ -231,7 +231,9 @@ mod tests {
         let sched = s.schedule();
         assert_eq!(sched.len(), 5 + 61 * 4);
         let keys: Vec<_> = sched.iter().filter(|x| x.part == Part::Key).collect();
-        assert!(keys.windows(2).all(|w| w[1].at_ms - w[0].at_ms == SPACING_MS));
+        assert!(keys
+            .windows(2)
+            .all(|w| w[1].at_ms - w[0].at_ms == SPACING_MS));
         assert!(sched[4].at_ms + 2000 < keys[0].at_ms);
         let notes = s.sync_notes();
         assert!(notes.windows(2).all(|w| w[0] != w[1]));

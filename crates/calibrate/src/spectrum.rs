@@ -137,7 +137,10 @@ impl KeyBand {
     }
 
     /// The mean magnitude of the harmonic bins (for the flux's compression).
-    pub(crate) fn harmonic_magnitudes<'a>(&'a self, p: &'a [f32]) -> impl Iterator<Item = f32> + 'a {
+    pub(crate) fn harmonic_magnitudes<'a>(
+        &'a self,
+        p: &'a [f32],
+    ) -> impl Iterator<Item = f32> + 'a {
         self.harmonic.iter().map(move |&b| p[b].sqrt())
     }
 }

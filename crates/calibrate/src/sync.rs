@@ -29,7 +29,10 @@ pub(crate) struct Found {
 
 /// The best match, or the most strikes found anywhere.
 pub(crate) fn find(onsets: &[Onset]) -> Result<Found, usize> {
-    let marks: Vec<f64> = SYNC_MARKS_MS.iter().map(|&m| f64::from(m) / 1000.0).collect();
+    let marks: Vec<f64> = SYNC_MARKS_MS
+        .iter()
+        .map(|&m| f64::from(m) / 1000.0)
+        .collect();
     let span = marks[marks.len() - 1];
     // (hits, strangers, squared error, offset)
     let mut best: Option<(usize, usize, f64, f64)> = None;
@@ -73,8 +76,10 @@ pub(crate) fn find(onsets: &[Onset]) -> Result<Found, usize> {
         let offset = sum / hits as f64;
         let better = match best {
             None => true,
-            Some((h, s, e, _)) => (hits, std::cmp::Reverse(strangers)) > (h, std::cmp::Reverse(s))
-                || (hits == h && strangers == s && err < e - 1e-9),
+            Some((h, s, e, _)) => {
+                (hits, std::cmp::Reverse(strangers)) > (h, std::cmp::Reverse(s))
+                    || (hits == h && strangers == s && err < e - 1e-9)
+            }
         };
         if better {
             best = Some((hits, strangers, err, offset));

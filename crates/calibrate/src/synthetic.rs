@@ -132,7 +132,12 @@ pub fn hidden_robot(low: u8, high: u8, softest: (f64, f64), seed: u64) -> Vec<Hi
 /// fainter than `floor` on the velocity scale (40 log10(floor / 127) dB against the key's
 /// full power): such a strike is under the noise of a real room, and no method can tell it
 /// from silence (the accuracy example measures where that floor lies).
-pub fn clear_of_floor(keys: &mut [HiddenKey], score: &Score, robot: &orch_robot::Robot, floor: f64) {
+pub fn clear_of_floor(
+    keys: &mut [HiddenKey],
+    score: &Score,
+    robot: &orch_robot::Robot,
+    floor: f64,
+) {
     for (i, k) in keys.iter_mut().enumerate() {
         let note = score.low + i as u8;
         for &v in &score.velocities {
@@ -171,15 +176,31 @@ pub fn onsets(
         .filter_map(|(i, s)| {
             let k = &keys[usize::from(s.note - score.low)];
             let d = duty(robot, s.note, s.velocity);
-            k.sounds_at(d)
-                .then(|| (i, f64::from(s.at_ms) + room.capture_offset_ms + k.delay_at(d)))
+            k.sounds_at(d).then(|| {
+                (
+                    i,
+                    f64::from(s.at_ms) + room.capture_offset_ms + k.delay_at(d),
+                )
+            })
         })
         .collect()
 }
 
 /// Records the score played by the hidden robot in the room.
-pub fn record(score: &Score, robot: &orch_robot::Robot, keys: &[HiddenKey], room: &Room) -> Recording {
-    record_strikes(&score.schedule(), score.low, f64::from(score.length_ms()), robot, keys, room)
+pub fn record(
+    score: &Score,
+    robot: &orch_robot::Robot,
+    keys: &[HiddenKey],
+    room: &Room,
+) -> Recording {
+    record_strikes(
+        &score.schedule(),
+        score.low,
+        f64::from(score.length_ms()),
+        robot,
+        keys,
+        room,
+    )
 }
 
 /// Records any strikes (each held [`NOTE_MS`]) played by the hidden robot whose lowest key is
@@ -216,7 +237,12 @@ pub fn record_strikes(
             .map(|h| {
                 let h = f64::from(h);
                 let f = h * f0 * (1.0 + 1e-4 * h * h).sqrt();
-                (f, 1.0 / h, tau0 / (1.0 + 0.3 * (h - 1.0)), rng.range(0.0, 6.283))
+                (
+                    f,
+                    1.0 / h,
+                    tau0 / (1.0 + 0.3 * (h - 1.0)),
+                    rng.range(0.0, std::f64::consts::TAU),
+                )
             })
             .filter(|p| p.0 < 0.45 * rate)
             .collect();

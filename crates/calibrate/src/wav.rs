@@ -61,9 +61,9 @@ impl Recording {
         }
         let channels = usize::from(spec.channels.max(1));
         let scaled: Vec<f32> = match (spec.sample_format, spec.bits_per_sample) {
-            (hound::SampleFormat::Int, 16) => collect(wav.into_samples::<i16>(), |x| {
-                f32::from(x) / 32768.0
-            })?,
+            (hound::SampleFormat::Int, 16) => {
+                collect(wav.into_samples::<i16>(), |x| f32::from(x) / 32768.0)?
+            }
             (hound::SampleFormat::Int, 24) => {
                 collect(wav.into_samples::<i32>(), |x| x as f32 / 8_388_608.0)?
             }

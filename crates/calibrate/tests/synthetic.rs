@@ -49,16 +49,28 @@ fn calibration_recovers_hidden_delays_curves_and_softest_at_30_db_with_reverb() 
     let cal = analyze(&rec, &robot, &score, Some(anchor)).unwrap();
     // The capture offset holds the method's common bias (the onset is timed half-way up the
     // 3 ms attack), which the anchor takes out of the delays.
-    assert!((cal.capture_offset_ms - 1712.3).abs() < 2.0, "{}", cal.capture_offset_ms);
-    assert!(cal.keys.iter().all(|k| k
-        .problems
-        .iter()
-        .all(|p| p.contains("below the key's softest"))), "{:?}", cal.keys_with_problems().collect::<Vec<_>>());
+    assert!(
+        (cal.capture_offset_ms - 1712.3).abs() < 2.0,
+        "{}",
+        cal.capture_offset_ms
+    );
+    assert!(
+        cal.keys.iter().all(|k| k
+            .problems
+            .iter()
+            .all(|p| p.contains("below the key's softest"))),
+        "{:?}",
+        cal.keys_with_problems().collect::<Vec<_>>()
+    );
     let out = robot_toml::calibrated(&text, &cal).unwrap();
     let calibrated = Robot::from_toml(&out).unwrap();
     let e = errors(&cal, &calibrated, &robot, &keys, &score);
     assert!(e.missed.is_empty(), "keys missed: {:?}", e.missed);
-    assert!(e.softest_wrong.is_empty(), "softest wrong: {:?}", e.softest_wrong);
+    assert!(
+        e.softest_wrong.is_empty(),
+        "softest wrong: {:?}",
+        e.softest_wrong
+    );
     assert!(e.velocity_max_steps <= 3.0, "{e:?}");
     // From E3 up every measured delay is within 1 ms; in the bass, within 4 ms (a 3 ms
     // attack is shorter than a bass string's period: README, "What remains").
@@ -83,7 +95,11 @@ fn without_an_anchor_delays_are_relative_to_middle_c_in_the_robot_file() {
     for (k, h) in cal.keys.iter().zip(&keys) {
         let f = k.fit.unwrap();
         let want = h.press_delay_ms - keys[0].press_delay_ms + 15.0;
-        assert!((f.press_delay_ms - want).abs() < 1.0, "{}: {f:?} vs {want}", k.note);
+        assert!(
+            (f.press_delay_ms - want).abs() < 1.0,
+            "{}: {f:?} vs {want}",
+            k.note
+        );
     }
     let out = robot_toml::calibrated(&text, &cal).unwrap();
     assert!(out.contains("RELATIVE to note 60"), "{out}");
@@ -103,7 +119,9 @@ fn a_key_that_never_sounds_is_named_and_left_as_it_was() {
     assert!(k.fit.is_none());
     assert_eq!(k.softest_velocity, None);
     assert!(
-        k.problems.iter().any(|p| p.contains("no sound at any level")),
+        k.problems
+            .iter()
+            .any(|p| p.contains("no sound at any level")),
         "{:?}",
         k.problems
     );
@@ -137,7 +155,13 @@ fn a_mechanical_thump_before_the_string_does_not_move_the_onset() {
     };
     let cal = analyze(&rec, &robot, &score, Some(anchor)).unwrap();
     let out = robot_toml::calibrated(&text, &cal).unwrap();
-    let e = errors(&cal, &Robot::from_toml(&out).unwrap(), &robot, &keys, &score);
+    let e = errors(
+        &cal,
+        &Robot::from_toml(&out).unwrap(),
+        &robot,
+        &keys,
+        &score,
+    );
     assert!(e.missed.is_empty() && e.softest_wrong.is_empty(), "{e:?}");
     assert!(e.delay_max_ms <= 1.0, "{e:?}");
     assert!(cal.keys.iter().all(|k| k
@@ -154,7 +178,9 @@ fn two_onsets_for_one_strike_are_reported_not_fitted() {
     let keys = hidden(&score, &robot, 4);
     // A key whose velocity 43 sounds strikes again, at full power, 200 ms after it.
     let note = (60..=71u8)
-        .find(|&n| keys[usize::from(n - 60)].sounds_at(orch_calibrate::synthetic::duty(&robot, n, 43)))
+        .find(|&n| {
+            keys[usize::from(n - 60)].sounds_at(orch_calibrate::synthetic::duty(&robot, n, 43))
+        })
         .unwrap();
     let mut strikes = score.schedule();
     let s = *strikes
@@ -166,17 +192,29 @@ fn two_onsets_for_one_strike_are_reported_not_fitted() {
         velocity: 127,
         ..s
     });
-    let rec = record_strikes(&strikes, score.low, f64::from(score.length_ms()), &robot, &keys, &room(30.0));
+    let rec = record_strikes(
+        &strikes,
+        score.low,
+        f64::from(score.length_ms()),
+        &robot,
+        &keys,
+        &room(30.0),
+    );
     let cal = analyze(&rec, &robot, &score, None).unwrap();
     let k = &cal.keys[usize::from(note - 60)];
     assert!(
-        k.problems.iter().any(|p| p.starts_with("velocity 43: 2 onsets")),
+        k.problems
+            .iter()
+            .any(|p| p.starts_with("velocity 43: 2 onsets")),
         "{:?}",
         k.problems
     );
     assert_eq!(k.levels[1].press_delay_ms, None);
     for other in cal.keys.iter().filter(|k| k.note != note) {
-        assert!(other.problems.iter().all(|p| !p.contains("onsets")), "{other:?}");
+        assert!(
+            other.problems.iter().all(|p| !p.contains("onsets")),
+            "{other:?}"
+        );
     }
 }
 
@@ -225,7 +263,8 @@ fn bad_recordings_are_refused_with_their_reason() {
     let e = Recording::read(&wav_bytes(&low)[..]).unwrap_err();
     assert!(e.to_string().contains("8000 Hz"), "{e}");
     // Too short: the last quarter cut off.
-    let short = Recording::from_samples(rec.rate, rec.samples[..rec.samples.len() * 3 / 4].to_vec());
+    let short =
+        Recording::from_samples(rec.rate, rec.samples[..rec.samples.len() * 3 / 4].to_vec());
     let e = analyze(&short, &robot, &score, None).unwrap_err();
     assert!(matches!(e, CalibrateError::TooShort { .. }), "{e}");
     // Silence.
@@ -235,7 +274,10 @@ fn bad_recordings_are_refused_with_their_reason() {
     // Clipped through most of it: the gain 40 dB too high.
     let hot = Recording::from_samples(
         rec.rate,
-        rec.samples.iter().map(|x| (x * 100.0).clamp(-1.0, 1.0)).collect(),
+        rec.samples
+            .iter()
+            .map(|x| (x * 100.0).clamp(-1.0, 1.0))
+            .collect(),
     );
     let e = analyze(&hot, &robot, &score, None).unwrap_err();
     assert!(matches!(e, CalibrateError::Clipped { .. }), "{e}");
@@ -249,7 +291,14 @@ fn bad_recordings_are_refused_with_their_reason() {
             part: orch_calibrate::score::Part::Key,
         })
         .collect();
-    let other = record_strikes(&scale, 60, f64::from(score.length_ms()), &robot, &keys, &room(30.0));
+    let other = record_strikes(
+        &scale,
+        60,
+        f64::from(score.length_ms()),
+        &robot,
+        &keys,
+        &room(30.0),
+    );
     let e = analyze(&other, &robot, &score, None).unwrap_err();
     assert!(matches!(e, CalibrateError::SyncNotFound { .. }), "{e}");
     assert!(e.to_string().contains("sync figure"), "{e}");
