@@ -303,3 +303,38 @@ fn bad_recordings_are_refused_with_their_reason() {
     assert!(matches!(e, CalibrateError::SyncNotFound { .. }), "{e}");
     assert!(e.to_string().contains("sync figure"), "{e}");
 }
+
+#[test]
+fn an_on_off_robot_gets_press_delays_only() {
+    let text =
+        "[keys]\nlow = 60\nhigh = 71\n[[boards]]\nkind = \"pca9555\"\naddress = 0x21\nkeys = 12\n";
+    let robot = Robot::from_toml(text).unwrap();
+    let score = Score::for_robot(&robot, 4).unwrap();
+    let keys = hidden(&score, &robot, 8);
+    let rec = record(&score, &robot, &keys, &room(30.0));
+    let anchor = Anchor {
+        note: 60,
+        press_delay_ms: keys[0].press_delay_ms,
+    };
+    let cal = analyze(&rec, &robot, &score, Some(anchor)).unwrap();
+    let out = robot_toml::calibrated(text, &cal).unwrap();
+    assert!(!out.contains("[[dynamics.key]]"), "{out}");
+    assert!(!out.contains("soft_press_delay"), "{out}");
+    let calibrated = Robot::from_toml(&out).unwrap();
+    for (i, (k, h)) in cal.keys.iter().zip(&keys).enumerate() {
+        // Every level is a full-power strike: all sound, none is "below the softest".
+        assert_eq!(k.softest_velocity, Some(1), "{k:?}");
+        assert!(k.problems.is_empty(), "{k:?}");
+        let got = calibrated
+            .mechanics
+            .for_key(i as u8)
+            .press_delay
+            .as_micros() as f64
+            / 1000.0;
+        assert!(
+            (got - h.press_delay_ms).abs() <= 1.0,
+            "{}: {got} vs {h:?}",
+            k.note
+        );
+    }
+}
