@@ -126,3 +126,59 @@ where
         .collect::<Result<_, _>>()
         .map_err(|e| CalibrateError::NotWav(format!("its samples cannot be read: {e}")))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn wav(
+        spec: hound::WavSpec,
+        write: impl Fn(&mut hound::WavWriter<&mut std::io::Cursor<Vec<u8>>>),
+    ) -> Vec<u8> {
+        let mut c = std::io::Cursor::new(Vec::new());
+        let mut w = hound::WavWriter::new(&mut c, spec).unwrap();
+        write(&mut w);
+        w.finalize().unwrap();
+        c.into_inner()
+    }
+
+    #[test]
+    fn stereo_24_bit_is_mixed_down_and_its_clipping_counted() {
+        let spec = hound::WavSpec {
+            channels: 2,
+            sample_rate: 48_000,
+            bits_per_sample: 24,
+            sample_format: hound::SampleFormat::Int,
+        };
+        let bytes = wav(spec, |w| {
+            for i in 0..48_000 * 2 {
+                // Left at half scale, right at full scale in the first second only.
+                w.write_sample(4_194_304i32).unwrap();
+                w.write_sample(if i < 48_000 { 8_388_607i32 } else { 0 })
+                    .unwrap();
+            }
+        });
+        let r = Recording::read(&bytes[..]).unwrap();
+        assert_eq!(r.rate, 48_000);
+        assert_eq!(r.samples.len(), 96_000);
+        assert!((r.samples[0] - 0.75).abs() < 1e-4, "{}", r.samples[0]);
+        assert!((r.samples[60_000] - 0.25).abs() < 1e-4);
+        assert_eq!(r.clipped_per_second, [48_000, 0]);
+    }
+
+    #[test]
+    fn sixteen_bit_mono_reads_to_scale() {
+        let spec = hound::WavSpec {
+            channels: 1,
+            sample_rate: 44_100,
+            bits_per_sample: 16,
+            sample_format: hound::SampleFormat::Int,
+        };
+        let bytes = wav(spec, |w| {
+            w.write_sample(-16384i16).unwrap();
+            w.write_sample(16384i16).unwrap();
+        });
+        let r = Recording::read(&bytes[..]).unwrap();
+        assert_eq!(r.samples, [-0.5, 0.5]);
+    }
+}
