@@ -69,6 +69,7 @@ pub fn json(cal: &Calibration) -> serde_json::Value {
             "given": cal.anchor.given,
         },
         "keys": keys,
+        "warnings": cal.warnings,
     })
 }
 
@@ -120,6 +121,9 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
              give --anchor NOTE=MS for true ones",
             cal.anchor.note, cal.anchor.press_delay_ms
         );
+    }
+    for w in &cal.warnings {
+        eprintln!("orch: warning: {w}");
     }
     for k in cal.keys_with_problems() {
         eprintln!("orch: note {}: {}", k.note, k.problems.join("; "));

@@ -111,6 +111,8 @@ pub struct Calibration {
     pub anchor: AnchorUsed,
     /// Every key of the robot, lowest first.
     pub keys: Vec<KeyResult>,
+    /// What looks wrong with the recording as a whole (strikes after the score's end).
+    pub warnings: Vec<String>,
 }
 
 impl Calibration {
@@ -194,6 +196,26 @@ pub fn analyze(
                 a.note, score.low, score.high
             )));
         }
+    }
+    // Strikes after the score's end: the recording is of a longer score (other --levels,
+    // another robot's range), or the room was loud after it.
+    let mut warnings = Vec::new();
+    let end_s = (offset + f64::from(last) + 700.0) / 1000.0;
+    let mut in_score: Vec<f64> = onsets
+        .iter()
+        .filter(|o| o.t_s <= end_s)
+        .map(|o| o.flux)
+        .collect();
+    let typical = onset::median(&mut in_score);
+    let after = onsets
+        .iter()
+        .filter(|o| o.t_s > end_s && o.flux >= 0.5 * typical)
+        .count();
+    if after >= 3 {
+        warnings.push(format!(
+            "{after} strikes after the score's end: a recording of a longer score (written with \
+             other --levels, or for another robot)? Its analysis is then wrong"
+        ));
     }
     let low = score.low;
     let mut keys = Vec::new();
@@ -356,5 +378,6 @@ pub fn analyze(
         capture_offset_ms: offset - shift,
         anchor: used,
         keys,
+        warnings,
     })
 }

@@ -121,6 +121,9 @@ pub fn calibrated(input: &str, cal: &Calibration) -> Result<String, CalibrateErr
             a.note, a.press_delay_ms
         );
     }
+    for w in &cal.warnings {
+        head += &format!("# WARNING: {w}\n");
+    }
     for k in cal.keys_with_problems() {
         head += &format!("# note {}: {}\n", k.note, k.problems.join("; "));
     }

@@ -338,3 +338,17 @@ fn an_on_off_robot_gets_press_delays_only() {
         );
     }
 }
+
+#[test]
+fn a_recording_of_a_longer_score_is_warned_about() {
+    let (robot, _, rec) = small_recording(30.0);
+    let three = Score::for_robot(&robot, 3).unwrap();
+    let cal = analyze(&rec, &robot, &three, None).unwrap();
+    assert_eq!(cal.warnings.len(), 1, "{:?}", cal.warnings);
+    assert!(cal.warnings[0].contains("strikes after the score's end"));
+    let four = Score::for_robot(&robot, 4).unwrap();
+    assert!(analyze(&rec, &robot, &four, None)
+        .unwrap()
+        .warnings
+        .is_empty());
+}
