@@ -12,9 +12,9 @@
 use crate::analyze::Calibration;
 use crate::CalibrateError;
 
-/// Added to a key's fitted softest duty for its velocity curve, per cent: about twice the
-/// fit's error at 30 dB SNR, so velocity 1 sounds, costing about 1.5 velocity steps at the
-/// soft end.
+/// Added to a key's fitted softest duty for its velocity curve, per cent: so velocity 1
+/// still sounds when the fit comes out a little low, at the cost of about 1.5 velocity steps
+/// at the soft end (the synthetic recordings' curves stay within 2.5 steps with it).
 pub const SOFTEST_MARGIN: f64 = 0.5;
 
 /// The calibrated robot.toml for the robot file `input` (its text).
