@@ -33,6 +33,9 @@ pub enum Command {
     /// Play a Standard MIDI File live, following a conductor: a baton video, tap tempo,
     /// MIDI clock or OSC.
     Conduct(ConductArgs),
+    /// Calibrate a robot by ear: write the calibration score (--score), or read a recording
+    /// of it (--wav) and print the calibrated robot.toml (or, with --json, the measurements).
+    Calibrate(CalibrateArgs),
     /// Render the virtual robot's performance of a MIDI file (or, with --score, the file
     /// itself) as sound, through a SoundFont, to a WAV file.
     Render(RenderArgs),
@@ -171,6 +174,35 @@ pub struct AnalyzeArgs {
     /// the robot's strikes as fills, coloured by outcome (see the README's `--svg`).
     #[arg(long, value_name = "FILE")]
     pub svg: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+#[command(group(clap::ArgGroup::new("mode").required(true).args(["score", "wav"])))]
+pub struct CalibrateArgs {
+    /// Write the calibration score to this Standard MIDI File: the sync figure, then every
+    /// key struck alone at each velocity level, one strike a second. Play it on the robot
+    /// with `orch play CAL.mid --no-compensation --out ...` and record it.
+    #[arg(long, value_name = "CAL.mid")]
+    pub score: Option<PathBuf>,
+    /// Read a recording of the score (WAV: 16/24-bit integer or 32-bit float, 16-192 kHz)
+    /// and print the calibrated robot.toml.
+    #[arg(long, value_name = "REC.wav", conflicts_with = "score")]
+    pub wav: Option<PathBuf>,
+    /// The robot's configuration (see `orch config`); the thesis's robot if not given.
+    #[arg(long, value_name = "FILE")]
+    pub robot: Option<PathBuf>,
+    /// Velocity levels per key, spread over 1..=127 (give the recording's analysis the
+    /// same number as its score).
+    #[arg(long, value_name = "N", default_value_t = 4)]
+    pub levels: u32,
+    /// One key's true press delay at full power, NOTE=MS (such as 60=14.5): it fixes the
+    /// microphone's unknown latency. Without it, delays are relative to the robot file's
+    /// press_delay for middle C.
+    #[arg(long, value_name = "NOTE=MS", requires = "wav")]
+    pub anchor: Option<String>,
+    /// Print the measurements as JSON instead of robot.toml.
+    #[arg(long, requires = "wav")]
+    pub json: bool,
 }
 
 #[derive(Args, Debug)]

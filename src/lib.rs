@@ -10,6 +10,7 @@
 //! V4L2 camera; the `v4l` crate's bindings are generated with libclang: `libclang-dev`).
 
 pub mod baton;
+pub mod calibrate;
 pub mod cli;
 pub mod conduct;
 pub mod decode;
@@ -37,5 +38,6 @@ pub fn run(command: cli::Command) -> anyhow::Result<()> {
         cli::Command::Run(args) => run::run(&args),
         cli::Command::Conduct(args) => conduct::run(&args),
         cli::Command::Render(args) => render::run(&args),
+        cli::Command::Calibrate(args) => calibrate::run(&args),
     }
 }

@@ -1,0 +1,135 @@
+//! The calibrated robot.toml: the input file's settings, with `[[mechanics.key]]` and
+//! `[[dynamics.key]]` entries filled from the fit.
+//!
+//! For each key that was fitted: `mechanics.key`'s `press_delay` (and on a PWM key its
+//! `soft_press_delay` and `softest`); on a PWM key, `dynamics.key`'s `softest` (the fitted
+//! softest plus [`SOFTEST_MARGIN`], so velocity 1 still sounds when the fit is a little
+//! low), `loudest` = 100 % (velocity 127 at full power: then the loudness heard is the
+//! velocity asked) and `hold` (the file's, lowered to the softest if it was above it). Other
+//! fields of a key's entries are kept; keys not fitted keep what the file gave them.
+//! Comments of the input file are not kept.
+
+use crate::analyze::Calibration;
+use crate::CalibrateError;
+
+/// Added to a key's fitted softest duty for its velocity curve, per cent: so velocity 1
+/// still sounds when the fit comes out a little low, at the cost of about 1.5 velocity steps
+/// at the soft end (the synthetic recordings' curves stay within 2.5 steps with it).
+pub const SOFTEST_MARGIN: f64 = 0.5;
+
+/// The calibrated robot.toml for the robot file `input` (its text).
+pub fn calibrated(input: &str, cal: &Calibration) -> Result<String, CalibrateError> {
+    use toml::{Table, Value};
+    let robot = orch_robot::Robot::from_toml(input)
+        .map_err(|e| CalibrateError::Internal(format!("the input robot.toml: {e}")))?;
+    let mut doc: Table = input
+        .parse()
+        .map_err(|e| CalibrateError::Internal(format!("the input robot.toml: {e}")))?;
+    let low = robot.config.range.low().get();
+    let default_hold = |note: u8| {
+        f64::from(
+            robot.config.dynamics.keys[usize::from(note - low)]
+                .hold
+                .percent(),
+        )
+    };
+    let section = |doc: &mut Table, name: &str| -> Vec<Table> {
+        let t = doc
+            .entry(name)
+            .or_insert_with(|| Value::Table(Table::new()))
+            .as_table_mut()
+            .expect("the robot file's section is a table");
+        t.remove("key")
+            .and_then(|v| match v {
+                Value::Array(a) => Some(
+                    a.into_iter()
+                        .filter_map(|e| match e {
+                            Value::Table(t) => Some(t),
+                            _ => None,
+                        })
+                        .collect(),
+                ),
+                _ => None,
+            })
+            .unwrap_or_default()
+    };
+    let mut mech = section(&mut doc, "mechanics");
+    let mut dyns = section(&mut doc, "dynamics");
+    fn entry(list: &mut Vec<Table>, note: u8) -> &mut Table {
+        let i = match list
+            .iter()
+            .position(|t| t.get("note").and_then(Value::as_integer) == Some(i64::from(note)))
+        {
+            Some(i) => i,
+            None => {
+                let mut t = Table::new();
+                t.insert("note".into(), Value::Integer(i64::from(note)));
+                list.push(t);
+                list.len() - 1
+            }
+        };
+        &mut list[i]
+    }
+    let ms = |x: f64| Value::String(format!("{:.1}ms", x.max(0.0)));
+    let pct = |x: f64| Value::String(format!("{:.2}%", x.clamp(0.01, 100.0)));
+    for k in &cal.keys {
+        let Some(f) = k.fit else { continue };
+        let m = entry(&mut mech, k.note);
+        m.insert("press_delay".into(), ms(f.press_delay_ms));
+        if f.dynamics {
+            m.insert(
+                "soft_press_delay".into(),
+                ms(f.soft_press_delay_ms.max(f.press_delay_ms)),
+            );
+            m.insert("softest".into(), pct(f.softest_percent));
+            let softest = (f.softest_percent + SOFTEST_MARGIN).min(100.0);
+            let d = entry(&mut dyns, k.note);
+            d.insert("softest".into(), pct(softest));
+            d.insert("loudest".into(), pct(100.0));
+            let hold = d
+                .get("hold")
+                .and_then(Value::as_str)
+                .and_then(|h| h.trim().trim_end_matches('%').trim().parse::<f64>().ok())
+                .unwrap_or_else(|| default_hold(k.note));
+            d.insert("hold".into(), pct(hold.min(softest)));
+        }
+    }
+    let by_note = |t: &Table| t.get("note").and_then(Value::as_integer).unwrap_or(0);
+    mech.sort_by_key(by_note);
+    dyns.sort_by_key(by_note);
+    for (name, list) in [("mechanics", mech), ("dynamics", dyns)] {
+        if !list.is_empty() {
+            doc[name].as_table_mut().expect("a table").insert(
+                "key".into(),
+                Value::Array(list.into_iter().map(Value::Table).collect()),
+            );
+        }
+    }
+    let body = toml::to_string(&doc)
+        .map_err(|e| CalibrateError::Internal(format!("writing robot.toml: {e}")))?;
+    let a = cal.anchor;
+    let mut head = String::from("# robot.toml calibrated by `orch calibrate` from a recording.\n");
+    if a.given {
+        head += &format!(
+            "# Press delays pinned by the anchor: note {} = {} ms at full power.\n",
+            a.note, a.press_delay_ms
+        );
+    } else {
+        head += &format!(
+            "# Press delays are RELATIVE to note {}'s press_delay in the input robot.toml \
+             ({} ms): the microphone's latency is unknown. Give --anchor NOTE=MS for true ones.\n",
+            a.note, a.press_delay_ms
+        );
+    }
+    for w in &cal.warnings {
+        head += &format!("# WARNING: {w}\n");
+    }
+    for k in cal.keys_with_problems() {
+        head += &format!("# note {}: {}\n", k.note, k.problems.join("; "));
+    }
+    let text = format!("{head}\n{body}");
+    orch_robot::Robot::from_toml(&text).map_err(|e| {
+        CalibrateError::Internal(format!("the calibrated robot.toml does not load: {e}"))
+    })?;
+    Ok(text)
+}

@@ -1,0 +1,387 @@
+//! Synthetic recordings of the calibration score, for tests and figures: a robot whose keys'
+//! figures are known (hidden from the analysis), a simple struck string, a room.
+//!
+//! - **The keys** ([`HiddenKey`]): a press delay at full power and at the softest duty, a
+//!   softest duty below which the key makes no sound, a gain (how loud the microphone hears
+//!   it at full power). A strike at duty `d ≥ softest` sounds at the virtual robot's
+//!   loudness `v = 1 + 126 (d − softest) / (1 − softest)`, with an amplitude `gain · (v /
+//!   127)²` (40 log10 of velocity in dB, MIDI's convention), after the virtual robot's press
+//!   delay (linear in the duty).
+//! - **The string**: 10 partials `h f0 √(1 + B h²)` (B = 10⁻⁴), amplitudes `1/h`, random
+//!   phases, each decaying with a time constant from 1.2 s (C2) to about 0.3 s (C7),
+//!   shorter for higher partials; a 3 ms raised-cosine attack; the damper, 25 ms after the
+//!   note's end, stops it with a 40 ms time constant. Optionally a mechanical **thump**: 4 ms
+//!   of decaying white noise 12 ms before the string, as loud as the string (its amplitude).
+//! - **The room** ([`Room`]): the capture offset (the recording starts that long before the
+//!   score), an optional **reverberation** (four parallel feedback combs of 29.7, 37.1, 41.1
+//!   and 43.7 ms with a 0.6 s reverberation time, mixed at 30 %: a decaying tail, and echoes
+//!   that ripple the onsets), and white Gaussian **noise** at an SNR against the mean power
+//!   of the (reverberant) performance from its first strike to its last sound.
+
+use crate::score::{Score, NOTE_MS};
+use crate::wav::Recording;
+
+/// One key of the hidden robot.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HiddenKey {
+    /// Press delay at full power, ms.
+    pub press_delay_ms: f64,
+    /// Press delay at `softest`, ms.
+    pub soft_press_delay_ms: f64,
+    /// The softest duty that sounds, 0..=1.
+    pub softest: f64,
+    /// Amplitude at full power.
+    pub gain: f64,
+    /// A key that never sounds (a broken solenoid).
+    pub dead: bool,
+}
+
+impl HiddenKey {
+    /// Whether a strike at duty `d` sounds.
+    pub fn sounds_at(&self, d: f64) -> bool {
+        !self.dead && d >= self.softest
+    }
+
+    /// The press delay of a strike at duty `d`, ms.
+    pub fn delay_at(&self, d: f64) -> f64 {
+        if self.softest >= 1.0 {
+            return self.press_delay_ms;
+        }
+        let x = ((1.0 - d) / (1.0 - self.softest)).clamp(0.0, 1.0);
+        self.press_delay_ms + (self.soft_press_delay_ms - self.press_delay_ms) * x
+    }
+
+    /// The loudness on the velocity scale of a strike at duty `d` (0 if silent).
+    pub fn loudness_at(&self, d: f64) -> f64 {
+        if !self.sounds_at(d) {
+            return 0.0;
+        }
+        crate::fit::loudness(d, self.softest)
+    }
+}
+
+/// The room and the recorder.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Room {
+    /// Samples a second.
+    pub rate: u32,
+    /// How long before the score's time 0 the recording starts, ms.
+    pub capture_offset_ms: f64,
+    /// Signal-to-noise ratio, dB (`None`: no noise).
+    pub snr_db: Option<f64>,
+    /// A reverberant room.
+    pub reverb: bool,
+    /// A mechanical thump before each string.
+    pub thump: bool,
+    /// The noise's and phases' seed.
+    pub seed: u64,
+}
+
+/// A small deterministic generator (SplitMix64).
+#[derive(Clone, Debug)]
+pub struct Rng(u64);
+
+impl Rng {
+    /// Seeded.
+    pub fn new(seed: u64) -> Self {
+        Self(seed)
+    }
+
+    /// Uniform in 0..1.
+    pub fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Uniform in `lo..hi`.
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.uniform()
+    }
+
+    /// Standard normal (Box–Muller).
+    pub fn normal(&mut self) -> f64 {
+        let u = self.uniform().max(1e-300);
+        let v = self.uniform();
+        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+    }
+}
+
+/// A hidden robot for keys `low..=high`: press delays 5–40 ms at full power, 5–25 ms more
+/// at the softest; softest duties from `softest.0` to `softest.1`; gains over 12 dB.
+pub fn hidden_robot(low: u8, high: u8, softest: (f64, f64), seed: u64) -> Vec<HiddenKey> {
+    let mut rng = Rng::new(seed);
+    (low..=high)
+        .map(|_| {
+            let press = rng.range(5.0, 40.0);
+            HiddenKey {
+                press_delay_ms: press,
+                soft_press_delay_ms: press + rng.range(5.0, 25.0),
+                softest: rng.range(softest.0, softest.1),
+                gain: 0.25 * 10f64.powf(rng.range(-0.6, 0.0)),
+                dead: false,
+            }
+        })
+        .collect()
+}
+
+/// Moves each key's softest duty just above any level of the score that would sound
+/// fainter than `floor` on the velocity scale (40 log10(floor / 127) dB against the key's
+/// full power): such a strike is under the noise of a real room, and no method can tell it
+/// from silence (the accuracy example measures where that floor lies).
+pub fn clear_of_floor(
+    keys: &mut [HiddenKey],
+    score: &Score,
+    robot: &orch_robot::Robot,
+    floor: f64,
+) {
+    for (i, k) in keys.iter_mut().enumerate() {
+        let note = score.low + i as u8;
+        for &v in &score.velocities {
+            let d = duty(robot, note, v);
+            let l = k.loudness_at(d);
+            if l > 0.0 && l < floor {
+                k.softest = d + 0.002;
+            }
+        }
+    }
+}
+
+/// The strike duty (0..=1) the robot plays `velocity` at on `note`.
+pub fn duty(robot: &orch_robot::Robot, note: u8, velocity: u8) -> f64 {
+    let low = robot.config.range.low().get();
+    let touch = robot.config.dynamics.keys[usize::from(note - low)];
+    f64::from(
+        touch
+            .strike_duty(orch_core::Velocity::new(velocity).expect("0..=127"))
+            .get(),
+    ) / 4095.0
+}
+
+/// Where each strike of the score sounds in the recording: (strike index, onset ms), for the
+/// strikes that sound.
+pub fn onsets(
+    score: &Score,
+    robot: &orch_robot::Robot,
+    keys: &[HiddenKey],
+    room: &Room,
+) -> Vec<(usize, f64)> {
+    score
+        .schedule()
+        .iter()
+        .enumerate()
+        .filter_map(|(i, s)| {
+            let k = &keys[usize::from(s.note - score.low)];
+            let d = duty(robot, s.note, s.velocity);
+            k.sounds_at(d).then(|| {
+                (
+                    i,
+                    f64::from(s.at_ms) + room.capture_offset_ms + k.delay_at(d),
+                )
+            })
+        })
+        .collect()
+}
+
+/// Records the score played by the hidden robot in the room.
+pub fn record(
+    score: &Score,
+    robot: &orch_robot::Robot,
+    keys: &[HiddenKey],
+    room: &Room,
+) -> Recording {
+    record_strikes(
+        &score.schedule(),
+        score.low,
+        f64::from(score.length_ms()),
+        robot,
+        keys,
+        room,
+    )
+}
+
+/// Records any strikes (each held [`NOTE_MS`]) played by the hidden robot whose lowest key is
+/// `low`, `length_ms` long from the score's time 0.
+pub fn record_strikes(
+    schedule: &[crate::Strike],
+    low: u8,
+    length_ms: f64,
+    robot: &orch_robot::Robot,
+    keys: &[HiddenKey],
+    room: &Room,
+) -> Recording {
+    let rate = f64::from(room.rate);
+    let total_ms = length_ms + room.capture_offset_ms + 500.0;
+    let mut x = vec![0.0f64; (total_ms / 1000.0 * rate) as usize];
+    let mut rng = Rng::new(room.seed ^ 0x5EED);
+    for s in schedule {
+        let k = &keys[usize::from(s.note - low)];
+        let d = duty(robot, s.note, s.velocity);
+        if !k.sounds_at(d) {
+            continue;
+        }
+        let onset_ms = f64::from(s.at_ms) + room.capture_offset_ms + k.delay_at(d);
+        let amp = k.gain * (k.loudness_at(d) / 127.0).powi(2);
+        let f0 = 440.0 * 2f64.powf((f64::from(s.note) - 69.0) / 12.0);
+        let tau0 = 1.2 * 2f64.powf(-(f64::from(s.note) - 36.0) / 30.0);
+        let start = onset_ms / 1000.0 * rate;
+        let damper_s = (f64::from(s.at_ms + NOTE_MS) + room.capture_offset_ms + 25.0 - onset_ms)
+            .max(0.0)
+            / 1000.0;
+        let end = ((start + (damper_s + 0.3) * rate) as usize).min(x.len());
+        let first = start.ceil() as usize;
+        let partials: Vec<(f64, f64, f64, f64)> = (1..=10)
+            .map(|h| {
+                let h = f64::from(h);
+                let f = h * f0 * (1.0 + 1e-4 * h * h).sqrt();
+                (
+                    f,
+                    1.0 / h,
+                    tau0 / (1.0 + 0.3 * (h - 1.0)),
+                    rng.range(0.0, std::f64::consts::TAU),
+                )
+            })
+            .filter(|p| p.0 < 0.45 * rate)
+            .collect();
+        for (n, y) in x.iter_mut().enumerate().take(end).skip(first) {
+            let t = (n as f64 - start) / rate;
+            let attack = if t < 0.003 {
+                0.5 - 0.5 * (std::f64::consts::PI * t / 0.003).cos()
+            } else {
+                1.0
+            };
+            let damp = if t > damper_s {
+                (-(t - damper_s) / 0.040).exp()
+            } else {
+                1.0
+            };
+            let mut v = 0.0;
+            for &(f, a, tau, ph) in &partials {
+                v += a * (-t / tau).exp() * (2.0 * std::f64::consts::PI * f * t + ph).sin();
+            }
+            *y += amp * attack * damp * v;
+        }
+        if room.thump {
+            let t0 = ((onset_ms - 12.0) / 1000.0 * rate).max(0.0) as usize;
+            for n in 0..(0.004 * rate) as usize {
+                if let Some(y) = x.get_mut(t0 + n) {
+                    *y += amp * rng.normal() * (-(n as f64) / (0.001 * rate)).exp();
+                }
+            }
+        }
+    }
+    if room.reverb {
+        let mut wet = vec![0.0f64; x.len()];
+        for delay_ms in [29.7, 37.1, 41.1, 43.7] {
+            let dl = (delay_ms / 1000.0 * rate) as usize;
+            // Gain for a 0.6 s reverberation time (60 dB down).
+            let g = 10f64.powf(-3.0 * delay_ms / 1000.0 / 0.6);
+            let mut y = vec![0.0f64; x.len()];
+            for n in 0..x.len() {
+                y[n] = x[n] + if n >= dl { g * y[n - dl] } else { 0.0 };
+            }
+            for (w, v) in wet.iter_mut().zip(&y) {
+                *w += v;
+            }
+        }
+        for (v, w) in x.iter_mut().zip(&wet) {
+            *v += 0.3 / 4.0 * (w - *v);
+        }
+    }
+    if let Some(snr) = room.snr_db {
+        let from = ((room.capture_offset_ms + f64::from(crate::score::LEAD_IN_MS)) / 1000.0 * rate)
+            as usize;
+        let span = &x[from.min(x.len())..];
+        let power = span.iter().map(|v| v * v).sum::<f64>() / span.len().max(1) as f64;
+        let sigma = (power / 10f64.powf(snr / 10.0)).sqrt();
+        for v in &mut x {
+            *v += sigma * rng.normal();
+        }
+    }
+    Recording::from_samples(room.rate, x.into_iter().map(|v| v as f32).collect())
+}
+
+/// How far a calibration is from the hidden robot.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Errors {
+    /// The largest error of a measured press delay (each sounding level), ms.
+    pub delay_max_ms: f64,
+    /// The median of those errors, ms.
+    pub delay_median_ms: f64,
+    /// The largest error of a measured press delay on keys from E3 (note 52) up, ms.
+    pub delay_max_from_e3_ms: f64,
+    /// The largest error of a fitted `press_delay` (full power), ms.
+    pub press_delay_max_ms: f64,
+    /// The largest error of the velocity curve, in velocity steps: the calibrated robot
+    /// file's curve played on the hidden key, |loudness heard − velocity asked| over every
+    /// velocity 1..=127 (infinite where a velocity makes no sound).
+    pub velocity_max_steps: f64,
+    /// The median over keys of each key's largest velocity error.
+    pub velocity_median_steps: f64,
+    /// Keys whose softest sounding level is not the hidden one.
+    pub softest_wrong: Vec<u8>,
+    /// Keys that sounded but were not fitted.
+    pub missed: Vec<u8>,
+}
+
+/// Compares a calibration (and the robot.toml written from it) with the hidden robot.
+pub fn errors(
+    cal: &crate::Calibration,
+    calibrated: &orch_robot::Robot,
+    input: &orch_robot::Robot,
+    keys: &[HiddenKey],
+    score: &Score,
+) -> Errors {
+    let mut e = Errors::default();
+    let mut delays = Vec::new();
+    let mut per_key_velocity = Vec::new();
+    for (k, hidden) in cal.keys.iter().zip(keys) {
+        let note = k.note;
+        let want_softest = score
+            .velocities
+            .iter()
+            .copied()
+            .find(|&v| hidden.sounds_at(duty(input, note, v)));
+        if want_softest != k.softest_velocity {
+            e.softest_wrong.push(note);
+        }
+        if hidden.dead {
+            continue;
+        }
+        let Some(f) = k.fit else {
+            e.missed.push(note);
+            continue;
+        };
+        for l in &k.levels {
+            if let Some(d) = l.press_delay_ms {
+                let truth = hidden.delay_at(duty(input, note, l.velocity));
+                delays.push((d - truth).abs());
+                if note >= 52 {
+                    e.delay_max_from_e3_ms = e.delay_max_from_e3_ms.max((d - truth).abs());
+                }
+            }
+        }
+        e.press_delay_max_ms = e
+            .press_delay_max_ms
+            .max((f.press_delay_ms - hidden.press_delay_ms).abs());
+        let mut worst: f64 = 0.0;
+        for v in 1..=127u8 {
+            let d = duty(calibrated, note, v);
+            let heard = hidden.loudness_at(d);
+            worst = worst.max(if heard == 0.0 {
+                f64::INFINITY
+            } else {
+                (heard - f64::from(v)).abs()
+            });
+        }
+        per_key_velocity.push(worst);
+    }
+    e.delay_max_ms = delays.iter().copied().fold(0.0, f64::max);
+    e.delay_median_ms = crate::onset::median(&mut delays);
+    e.velocity_max_steps = per_key_velocity.iter().copied().fold(0.0, f64::max);
+    e.velocity_median_steps = crate::onset::median(&mut per_key_velocity);
+    e
+}
