@@ -687,28 +687,12 @@ fn dynamics(
         hold: duty("dynamics.hold", &d.hold)?,
     };
     check_touch(&default, "dynamics.")?;
-    let (low, high) = (range.low().get(), range.high().get());
+    let low = range.low().get();
     let mut keys = [default; 128];
     for (i, k) in d.key.iter().enumerate() {
         let field = |name: &str| format!("dynamics.key[{i}].{name}");
-        if !(i64::from(low)..=i64::from(high)).contains(&k.note) {
-            return Err(RobotError::field(
-                field("note"),
-                format!(
-                    "{} is out of range: the robot has keys for notes {low}..={high} only",
-                    k.note
-                ),
-            ));
-        }
-        if let Some(j) = d.key[..i].iter().position(|o| o.note == k.note) {
-            return Err(RobotError::field(
-                field("note"),
-                format!(
-                    "note {} is already given in dynamics.key[{j}]; list each key once",
-                    k.note
-                ),
-            ));
-        }
+        let notes: Vec<i64> = d.key.iter().map(|k| k.note).collect();
+        key_entry("dynamics.key", &notes, i, range)?;
         let mut t = default;
         if let Some(x) = &k.softest {
             t.softest = duty(&field("softest"), x)?;
@@ -733,6 +717,27 @@ fn dynamics(
         }
     }
     Ok(Dynamics { strike, keys })
+}
+
+/// Checks entry `i` of a per-key table (`table` = "mechanics.key", whose entries name these
+/// `notes`): a note the robot has a key for, listed once.
+fn key_entry(table: &str, notes: &[i64], i: usize, range: KeyRange) -> Result<(), RobotError> {
+    let (low, high) = (range.low().get(), range.high().get());
+    let note = notes[i];
+    let field = format!("{table}[{i}].note");
+    if !(i64::from(low)..=i64::from(high)).contains(&note) {
+        return Err(RobotError::field(
+            field,
+            format!("{note} is out of range: the robot has keys for notes {low}..={high} only"),
+        ));
+    }
+    if let Some(j) = notes[..i].iter().position(|&o| o == note) {
+        return Err(RobotError::field(
+            field,
+            format!("note {note} is already given in {table}[{j}]; list each key once"),
+        ));
+    }
+    Ok(())
 }
 
 /// Refuses a touch whose curve falls, whose hold is above its softest strike, or whose softest
@@ -778,28 +783,12 @@ fn mechanics(m: &Mechanics, range: KeyRange) -> Result<MechanicsConfig, RobotErr
         softest: duty("mechanics.softest", &m.softest)?.get(),
         soft_press_delay: delay("mechanics.soft_press_delay", &m.soft_press_delay)?,
     };
-    let (low, high) = (range.low().get(), range.high().get());
+    let low = range.low().get();
     let mut mechanics = MechanicsConfig::uniform(default);
     for (i, k) in m.key.iter().enumerate() {
         let field = |name: &str| format!("mechanics.key[{i}].{name}");
-        if !(i64::from(low)..=i64::from(high)).contains(&k.note) {
-            return Err(RobotError::field(
-                field("note"),
-                format!(
-                    "{} is out of range: the robot has keys for notes {low}..={high} only",
-                    k.note
-                ),
-            ));
-        }
-        if let Some(j) = m.key[..i].iter().position(|o| o.note == k.note) {
-            return Err(RobotError::field(
-                field("note"),
-                format!(
-                    "note {} is already given in mechanics.key[{j}]; list each key once",
-                    k.note
-                ),
-            ));
-        }
+        let notes: Vec<i64> = m.key.iter().map(|k| k.note).collect();
+        key_entry("mechanics.key", &notes, i, range)?;
         let mut figures = default;
         if let Some(t) = &k.press_delay {
             figures.press_delay = delay(&field("press_delay"), t)?;
