@@ -2,14 +2,12 @@
 //! the follower's tempo goes to the performer through `Control`, and the performance's
 //! position is checked against the conductor's beats.
 
-use std::sync::Arc;
-
 use orch_perform::conduct::{encode_osc, OscArg};
 use orch_perform::{
-    perform, song_events, thesis_config, Action, Control, Cue, Follow, Follower, Link, MidiClock,
-    MidiRecording, OscCues, ScoreBeats, Setup, Tempo, Timed,
+    perform, song_events, Action, Control, Cue, Follow, Follower, MidiClock, MidiRecording,
+    OscCues, ScoreBeats, Timed,
 };
-use orch_seq::{Bell, Clock, Lateness, Song, VirtualClock};
+use orch_seq::Song;
 
 mod common;
 
@@ -19,88 +17,6 @@ mod smf;
 /// [`smf::quarters_smf`] parsed.
 fn quarters(beats: u32, bpm: f64) -> Song {
     Song::parse(&smf::quarters_smf(beats, bpm)).unwrap()
-}
-
-/// A clock whose waits deliver the conductor's input falling inside them: each input at its
-/// own time (µs after the score's start) goes through `apply`, which may steer `control`.
-struct Conducted<F: FnMut(u64, &Control)> {
-    inner: VirtualClock,
-    /// Times (from the score's start) at which `apply` is called, in order.
-    times: Vec<u64>,
-    next: usize,
-    start: Option<u64>,
-    control: Arc<Control>,
-    apply: F,
-}
-
-impl<F: FnMut(u64, &Control)> Conducted<F> {
-    fn new(control: &Arc<Control>, times: Vec<u64>, apply: F) -> Self {
-        Self {
-            inner: VirtualClock::new(),
-            times,
-            next: 0,
-            start: None,
-            control: Arc::clone(control),
-            apply,
-        }
-    }
-
-    /// Delivers the inputs up to `deadline_us`; with `bell`, stops after the first that rings
-    /// it (after `seen` rings), the clock at that input's time: whether one did.
-    fn deliver(&mut self, deadline_us: u64, bell: Option<(&Bell, u64)>) -> bool {
-        if self.start.is_none() {
-            self.start = self.control.time_map().map(|m| m.wall(0).max(0) as u64);
-        }
-        let Some(s) = self.start else {
-            return false;
-        };
-        while let Some(&t) = self.times.get(self.next) {
-            if s + t > deadline_us {
-                break;
-            }
-            self.inner.advance_to(s + t);
-            (self.apply)(s + t, &self.control);
-            self.next += 1;
-            if bell.is_some_and(|(b, seen)| b.rung() > seen) {
-                return true;
-            }
-        }
-        false
-    }
-}
-
-impl<F: FnMut(u64, &Control)> Clock for Conducted<F> {
-    fn now_us(&self) -> u64 {
-        self.inner.now_us()
-    }
-
-    fn wait_until(&mut self, deadline_us: u64) -> u64 {
-        self.deliver(deadline_us, None);
-        self.inner.wait_until(deadline_us)
-    }
-
-    /// The performer wakes at the input that rings its control: at that input's time.
-    fn wait_until_rung(&mut self, deadline_us: u64, bell: &Bell, seen: u64) -> bool {
-        if bell.rung() > seen || self.deliver(deadline_us, Some((bell, seen))) {
-            return true;
-        }
-        self.inner.wait_until(deadline_us);
-        false
-    }
-
-    fn lateness(&self) -> Lateness {
-        self.inner.lateness()
-    }
-}
-
-fn setup() -> Setup {
-    Setup {
-        config: thesis_config(),
-        sim: orch_sim::SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    }
 }
 
 /// MIDI clock from `from` to `to` BPM over `ramp` beats, then steady for `hold` beats: the
@@ -210,13 +126,10 @@ fn osc_tempo_messages_are_parsed_and_applied() {
     ];
     let mut applied = Vec::new();
     let mut k = 0;
-    let mut clock = Conducted {
-        inner: VirtualClock::new(),
-        times: vec![2_000_000, 4_000_000],
-        next: 0,
-        start: None,
-        control: Arc::clone(&control),
-        apply: |t: u64, c: &Control| {
+    let mut clock = Conducted::new(
+        &control,
+        vec![2_000_000, 4_000_000],
+        |t: u64, c: &Control| {
             for cue in osc.packet(t, &packets[k]).unwrap() {
                 let cue = Timed { t_us: t, cue };
                 if let Action::Tempo(tempo) = follower.cue(&cue, c.time_map().as_ref()) {
@@ -226,7 +139,7 @@ fn osc_tempo_messages_are_parsed_and_applied() {
             }
             k += 1;
         },
-    };
+    );
     let mut live = |_: &orch_perform::Live| {};
     let played = perform::<_, MidiRecording>(
         &setup(),
@@ -314,7 +227,7 @@ fn song_position_from_a_midi_clock_lands_on_its_bar() {
     assert_eq!(r.outcomes.skipped as usize, 16 - played_before, "{r:?}");
 }
 
-use common::conducted::{self, conduct, input, Run, Via};
+use common::conducted::{self, conduct, input, setup, Conducted, Run, Via};
 
 /// The worst |error| (ms) over `range` of the notes.
 fn worst(errors: &[f64], range: std::ops::Range<usize>) -> f64 {
