@@ -121,8 +121,7 @@ fn decode_sysex_payload_is_whole_up_to_1_mib_and_skips_realtime_bytes() {
 
 #[test]
 fn decode_text_reads_binary_from_a_file_and_ends_with_counters() {
-    let dir = std::env::temp_dir().join(format!("orch-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("cli");
     let file = dir.join("in.mid.raw");
     std::fs::write(&file, [0x3C, 0x90, 0x3C, 0x7F, 0x91, 0x40]).unwrap();
     let out = orch().args(["decode"]).arg(&file).output().unwrap();
@@ -254,8 +253,7 @@ fn interpret_guard_delays_a_repeated_note_and_guard_off_does_not() {
 
 #[test]
 fn interpret_guard_on_wins_over_a_robot_file_that_disables_it_and_says_so() {
-    let dir = std::env::temp_dir().join(format!("orch-guard-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("guard");
     let off = dir.join("guard-off.toml");
     std::fs::write(&off, "[guard]\nenabled = false\n").unwrap();
     let off = off.to_str().unwrap();
@@ -348,8 +346,7 @@ fn interpret_says_when_the_end_of_the_input_cut_a_message_off() {
 
 #[test]
 fn robot_file_changes_the_mapping_and_a_bad_one_names_the_field() {
-    let dir = std::env::temp_dir().join(format!("orch-robot-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("robot");
     let good = dir.join("robot.toml");
     std::fs::write(
         &good,
@@ -393,8 +390,7 @@ fn config_prints_a_commented_default_that_reads_back() {
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("# orch robot configuration"));
-    let dir = std::env::temp_dir().join(format!("orch-config-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("config");
     let file = dir.join("robot.toml");
     std::fs::write(&file, text.as_bytes()).unwrap();
     let out = orch()
@@ -415,8 +411,7 @@ fn config_for_pca9685_boards_reads_back_and_interpret_writes_their_duties() {
         .unwrap();
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout).to_string();
-    let dir = std::env::temp_dir().join(format!("orch-config-pwm-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("config-pwm");
     let file = dir.join("robot.toml");
     std::fs::write(&file, text.as_bytes()).unwrap();
     // Middle C at 127, D at 1, C released: one write of duties to the one board each time.
@@ -459,6 +454,34 @@ fn config_for_pca9685_boards_reads_back_and_interpret_writes_their_duties() {
     assert_eq!(report["outcomes"]["on_time"], report["notes"]);
     assert_eq!(report["outcomes"]["dropped"]["too_soft"], 0);
     assert_eq!(report["velocity_error"]["max"], 0);
+    // --writes gives a PCA9685's writes as its 16 duties after each.
+    let writes = dir.join("writes.jsonl");
+    let out = orch()
+        .args(["play", "--fast", "--writes"])
+        .arg(&writes)
+        .arg("--robot")
+        .arg(&file)
+        .arg("examples/ode-to-joy.mid")
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let lines = json_lines(&std::fs::read(&writes).unwrap());
+    let pwm: Vec<_> = lines
+        .iter()
+        .filter(|l| l["address"].as_u64() >= Some(0x40))
+        .collect();
+    assert!(!pwm.is_empty());
+    for l in &pwm {
+        let duty = l["duty"]
+            .as_array()
+            .expect("a PCA9685 write has its duties");
+        assert_eq!(duty.len(), 16);
+        assert!(l.get("outputs").is_none(), "{l}");
+    }
+    // Among them, holds at 35 % (1433).
+    assert!(pwm
+        .iter()
+        .any(|l| l["duty"].as_array().unwrap().iter().any(|d| d == 1433)));
     // And the on/off default is unchanged by the flag's default.
     let plain = orch().arg("config").output().unwrap();
     let named = orch()
@@ -472,8 +495,7 @@ fn config_for_pca9685_boards_reads_back_and_interpret_writes_their_duties() {
 /// report's, on the thesis's robot and on PCA9685 boards, for play and for analyze.
 #[test]
 fn the_note_by_note_account_has_every_note_in_score_order_and_the_reports_counts() {
-    let dir = std::env::temp_dir().join(format!("orch-notes-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("notes");
     let pwm = dir.join("pwm.toml");
     let out = orch()
         .args(["config", "--boards", "pca9685"])
@@ -568,8 +590,7 @@ fn the_note_by_note_account_has_every_note_in_score_order_and_the_reports_counts
 /// the report counts them, a dropped note's reason on it; an unwritable path exits 2.
 #[test]
 fn analyze_svg_draws_every_note_with_the_reports_outcomes() {
-    let dir = std::env::temp_dir().join(format!("orch-svg-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("svg");
     let pwm = dir.join("pwm.toml");
     let out = orch()
         .args(["config", "--boards", "pca9685"])
@@ -638,6 +659,13 @@ fn analyze_svg_draws_every_note_with_the_reports_outcomes() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("--svg"));
 }
 
+/// A folder of this test process's own for files a test writes, made if missing.
+fn scratch(tag: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("orch-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
 fn corpus(name: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../shared/midi")
@@ -646,8 +674,7 @@ fn corpus(name: &str) -> std::path::PathBuf {
 
 #[test]
 fn play_and_analyze_refuse_malformed_files_with_exit_2_and_no_panic() {
-    let dir = std::env::temp_dir().join(format!("orch-bad-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("bad");
     let good = std::fs::read(corpus("bach-invention-01.mid")).unwrap();
     let mut files: Vec<std::path::PathBuf> = [
         "bad-empty.mid",

@@ -3,10 +3,10 @@
 
 use embedded_hal::delay::DelayNs;
 use embedded_hal::i2c::I2c;
-use orch_core::{on_off, BoardId, BoardKind, Duty, FingerBoards};
+use orch_core::{full_or_off, on_off, BoardId, BoardKind, Duty, FingerBoards};
 
 use crate::pca9685::frames::State;
-use crate::pca9685::{device, Prescale, CHANNELS, FULL_ON};
+use crate::pca9685::{device, Prescale, CHANNELS};
 use crate::{frames, Error};
 
 /// One bus and up to `N` finger boards of either kind ([`BoardKind`]), in layout order.
@@ -198,11 +198,7 @@ impl<I2C: I2c, const N: usize> FingerBoards for MixedBoardSet<I2C, N> {
         let i = self.slot(board)?;
         match self.kinds[i] {
             BoardKind::OnOff => self.write_on_off(i, outputs),
-            BoardKind::Pwm => {
-                let duties =
-                    core::array::from_fn(|n| if outputs & (1 << n) != 0 { FULL_ON } else { 0 });
-                self.write_pwm(i, &duties)
-            }
+            BoardKind::Pwm => self.write_pwm(i, &full_or_off(outputs).map(|d| d.get())),
         }
     }
 

@@ -119,7 +119,7 @@ pub use interpreter::{Interpreter, KeyPhase, ACTIVE_SENSING_TIMEOUT};
 pub use keymap::{BoardSpan, Finger, KeyOf, KeyRange, Layout, OutOfRange};
 pub use message::Message;
 pub use outcome::{DropReason, Landing, NoteEvent, NoteSink};
-pub use output::{on_off, BoardId, BoardKind, FingerBoards};
+pub use output::{full_or_off, on_off, BoardId, BoardKind, FingerBoards};
 pub use recording::{Nack, Recording, Write};
 pub use stats::Stats;
 pub use time::{Duration, Instant};

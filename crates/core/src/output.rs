@@ -48,6 +48,18 @@ pub trait FingerBoards {
     }
 }
 
+/// On/off `outputs` as duties: [`Duty::FULL`] where bit `n` is set, [`Duty::OFF`] where not
+/// (the inverse of [`on_off`]).
+pub fn full_or_off(outputs: u16) -> [Duty; 16] {
+    core::array::from_fn(|n| {
+        if outputs & (1 << n) != 0 {
+            Duty::FULL
+        } else {
+            Duty::OFF
+        }
+    })
+}
+
 /// The on/off outputs of `duties`: bit `n` set where `duties[n]` is above 0.
 pub fn on_off(duties: &[Duty; 16]) -> u16 {
     duties

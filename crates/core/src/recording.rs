@@ -1,7 +1,7 @@
 //! A recording test double for [`FingerBoards`]: keeps every write, allocation-free.
 
 use crate::dynamics::Duty;
-use crate::output::{on_off, BoardId, FingerBoards};
+use crate::output::{full_or_off, on_off, BoardId, FingerBoards};
 
 /// One recorded board write.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -100,13 +100,7 @@ impl<const CAP: usize> FingerBoards for Recording<CAP> {
     type Error = Nack;
 
     fn write_board(&mut self, board: BoardId, outputs: u16) -> Result<(), Nack> {
-        let mut duties = [Duty::OFF; 16];
-        for (n, d) in duties.iter_mut().enumerate() {
-            if outputs & (1 << n) != 0 {
-                *d = Duty::FULL;
-            }
-        }
-        self.record(board, duties, None)
+        self.record(board, full_or_off(outputs), None)
     }
 
     fn write_duties(&mut self, board: BoardId, duties: &[Duty; 16]) -> Result<(), Nack> {

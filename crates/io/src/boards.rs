@@ -24,7 +24,7 @@ use std::time::Duration;
 
 use embedded_hal::i2c::I2c;
 use orch_boards::MixedBoardSet;
-use orch_core::{on_off, BoardId, BoardKind, Config, Duty, FingerBoards, Instant};
+use orch_core::{full_or_off, on_off, BoardId, BoardKind, Config, Duty, FingerBoards, Instant};
 use orch_perform::{Boards, LocalRobot, MidiOut, MAX_BOARDS};
 
 use crate::OutError;
@@ -128,17 +128,6 @@ pub struct ResilientBoards<I2C> {
     pwm_hz: u32,
     now_us: u64,
     stats: BoardStats,
-}
-
-/// `outputs` as duties: a set bit fully on.
-fn full_or_off(outputs: u16) -> [Duty; 16] {
-    core::array::from_fn(|n| {
-        if outputs & (1 << n) != 0 {
-            Duty::FULL
-        } else {
-            Duty::OFF
-        }
-    })
 }
 
 impl<I2C: TimedBus> ResilientBoards<I2C> {

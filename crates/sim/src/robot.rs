@@ -17,7 +17,9 @@ use orch_core::{BoardId, BoardKind, BoardSpan, Duty, FingerBoards, Layout};
 use crate::bus::{BusClock, BusError, SimTime, VirtualBus};
 use crate::mechanics::{Mechanics, MechanicsConfig};
 use crate::pca9555::{Pca9555, CONFIGURATION_0, OUTPUT_PORT_0};
-use crate::pca9685::Pca9685;
+use crate::pca9685::{
+    Pca9685, AI, ALL_LED_OFF_H, FULL_ON_OFF, LED0_ON_L, MODE1, MODE2, OUTDRV, PRE_SCALE, SLEEP,
+};
 use crate::recorder::{Performance, PinEdge, Recorder};
 
 /// What the virtual robot is made of.
@@ -173,11 +175,11 @@ impl VirtualRobot {
                 self.bus.write(a, &[CONFIGURATION_0, 0, 0])
             }
             BoardKind::Pwm => {
-                self.bus.write(a, &[0xFD, 0x10])?; // ALL_LED_OFF_H: full off
-                self.bus.write(a, &[0x00, 0x30])?; // MODE1: SLEEP | AI
-                self.bus.write(a, &[0xFE, prescale])?; // PRE_SCALE
-                self.bus.write(a, &[0x01, 0x04])?; // MODE2: OUTDRV
-                self.bus.write(a, &[0x00, 0x20]) // MODE1: AI, awake
+                self.bus.write(a, &[ALL_LED_OFF_H, FULL_ON_OFF])?;
+                self.bus.write(a, &[MODE1, SLEEP | AI])?;
+                self.bus.write(a, &[PRE_SCALE, prescale])?;
+                self.bus.write(a, &[MODE2, OUTDRV])?;
+                self.bus.write(a, &[MODE1, AI])
             }
         });
         self.sync();
@@ -371,14 +373,7 @@ impl FingerBoards for VirtualRobot {
     /// fails with [`BusError::AddressNack`].
     fn write_board(&mut self, board: BoardId, outputs: u16) -> Result<(), BusError> {
         if self.config.kind(board.index as usize) == BoardKind::Pwm {
-            let duties = core::array::from_fn(|n| {
-                if outputs & (1 << n) != 0 {
-                    Duty::FULL
-                } else {
-                    Duty::OFF
-                }
-            });
-            return self.write_duties(board, &duties);
+            return self.write_duties(board, &orch_core::full_or_off(outputs));
         }
         let [lo, hi] = outputs.to_le_bytes();
         let result = self.bus.write(board.address, &[OUTPUT_PORT_0, lo, hi]);
@@ -396,11 +391,11 @@ impl FingerBoards for VirtualRobot {
             return self.write_board(board, orch_core::on_off(duties));
         }
         let mut frame = [0u8; 65];
-        frame[0] = 0x06; // LED0_ON_L
+        frame[0] = LED0_ON_L;
         for (n, d) in duties.iter().enumerate() {
             let regs = match d.get() {
-                0 => [0, 0, 0, 0x10],
-                4095.. => [0, 0x10, 0, 0],
+                0 => [0, 0, 0, FULL_ON_OFF],
+                4095.. => [0, FULL_ON_OFF, 0, 0],
                 v => {
                     let [lo, hi] = v.to_le_bytes();
                     [0, 0, lo, hi]

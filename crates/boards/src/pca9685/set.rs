@@ -179,13 +179,7 @@ impl<I2C: I2c, const N: usize> orch_core::FingerBoards for Pca9685Set<I2C, N> {
     /// or none. `board.index` must be a board of the set ([`Error::UnknownBoard`]) and
     /// `board.address` its address ([`Error::AddressMismatch`]).
     fn write_board(&mut self, board: orch_core::BoardId, outputs: u16) -> Result<(), Self::Error> {
-        let duties = core::array::from_fn(|n| {
-            if outputs & (1 << n) != 0 {
-                super::FULL_ON
-            } else {
-                0
-            }
-        });
+        let duties = orch_core::full_or_off(outputs).map(|d| d.get());
         self.write_duty_values(board, &duties)
     }
 
