@@ -19,7 +19,8 @@
 //!   ([`BoardWrite`]).
 //!
 //! - [`session`]: a song played live on one or more robots ([`session::Session`]: a sender
-//!   thread a robot, one clock, one `Control` for stop, pause, jump, tempo and a conductor),
+//!   thread a robot, one clock, one `Control` for stop, pause, jump, tempo and a conductor;
+//!   jump to a bar, a checked tempo factor and tap tempo on the session itself),
 //!   a [`session::Snapshot`] of where it stands for any front end, every robot's report and
 //!   note-by-note account at the end.
 //!

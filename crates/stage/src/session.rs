@@ -11,8 +11,10 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use orch_io::{Channels, OutSpec, OutStats, Output};
+use orch_perform::follow::FACTOR_RANGE;
 use orch_perform::{
-    perform, realtime, song_events, Control, Link, Live, PerformError, Played, ScoreEvent, Setup,
+    perform, realtime, song_events, Control, Cue, Follow, Follower, Link, Live, PerformError,
+    Played, ScoreBeats, ScoreEvent, Setup, TapTempo, Tempo, Timed,
 };
 use orch_seq::Song;
 
@@ -225,9 +227,62 @@ impl std::fmt::Display for SessionFailure {
     }
 }
 
+/// The song's last bar (the bar of its last instant).
+pub fn last_bar(song: &Song) -> u32 {
+    song.bar_beat(song.duration_us().saturating_sub(1)).0
+}
+
+/// Where bar `bar` begins (µs of score time), if the song has it: from 1 to [`last_bar`].
+pub fn bar_start(song: &Song, bar: u32) -> Option<u64> {
+    (1..=last_bar(song))
+        .contains(&bar)
+        .then(|| song.bar_start_us(bar))
+        .flatten()
+}
+
+/// A command a session refused, said in words (nothing was changed).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Refused {
+    /// A jump to a bar the song does not have.
+    NoSuchBar {
+        /// The bar asked.
+        bar: u32,
+        /// The song's last bar.
+        last: u32,
+    },
+    /// A tempo factor out of range (or not a number).
+    Tempo(f64),
+}
+
+impl std::fmt::Display for Refused {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Refused::NoSuchBar { bar, last } => {
+                write!(f, "bar {bar}: the song has bars 1 to {last}")
+            }
+            Refused::Tempo(t) => write!(
+                f,
+                "tempo factor {t}: give a factor from {} to {}, such as 0.5 or 1.25",
+                FACTOR_RANGE.0, FACTOR_RANGE.1
+            ),
+        }
+    }
+}
+
+impl std::error::Error for Refused {}
+
+/// Tap tempo on a session: each tap a beat, the follower's rate taken as the tempo.
+struct Taps {
+    tap: TapTempo,
+    follower: Follower,
+}
+
 /// A song playing live on its robots. See the [module notes](self).
 pub struct Session {
     control: Arc<Control>,
+    /// The performers' clock's zero: taps are timed on it.
+    origin: Instant,
+    taps: Mutex<Taps>,
     senders: Vec<Sender>,
     watch: Arc<Watch>,
     /// Set when every robot has ended: the watcher tells a last time and ends.
@@ -241,6 +296,10 @@ impl Session {
     /// (`--from`) is taken before the first note.
     pub fn start(song: Song, lanes: Vec<Lane>, control: Arc<Control>, origin: Instant) -> Self {
         let song = Arc::new(song);
+        let taps = Mutex::new(Taps {
+            tap: TapTempo::new(),
+            follower: Follower::new(ScoreBeats::of(&song), Follow::Immediate),
+        });
         let (low_note, tempo) = lanes.first().map_or((0, 1.0), |l| {
             (l.setup.config.range.low().get(), l.setup.tempo.get())
         });
@@ -302,6 +361,8 @@ impl Session {
         };
         Self {
             control,
+            origin,
+            taps,
             senders,
             watch,
             done,
@@ -333,6 +394,48 @@ impl Session {
     /// The control every robot follows: stop, pause, resume, jump, tempo.
     pub fn control(&self) -> &Arc<Control> {
         &self.control
+    }
+
+    /// Jump to the start of bar `bar` (see [`Control::jump_to`]); a bar the song does not
+    /// have is refused and changes nothing. Returns the target, µs of score time.
+    pub fn jump_to_bar(&self, bar: u32) -> Result<u64, Refused> {
+        let song = &self.watch.song;
+        let t = bar_start(song, bar).ok_or(Refused::NoSuchBar {
+            bar,
+            last: last_bar(song),
+        })?;
+        self.control.jump_to(t);
+        Ok(t)
+    }
+
+    /// Play at tempo factor `factor` (1.0: as written) from now on; a factor out of range
+    /// (a twentieth to twenty) is refused and changes nothing.
+    pub fn set_tempo(&self, factor: f64) -> Result<Tempo, Refused> {
+        let tempo = Tempo::new(factor)
+            .filter(|t| (FACTOR_RANGE.0..=FACTOR_RANGE.1).contains(&t.get()))
+            .ok_or(Refused::Tempo(factor))?;
+        self.control.set_tempo(tempo);
+        Ok(tempo)
+    }
+
+    /// Tap tempo: a beat tapped now. See [`tap_at`](Self::tap_at).
+    pub fn tap(&self) -> Option<f64> {
+        self.tap_at(self.origin.elapsed().as_micros() as u64)
+    }
+
+    /// Tap tempo: a beat tapped at `t_us` on the performers' clock (µs since the session's
+    /// origin). The taps go through the conductor's follower (rate only, as `orch conduct
+    /// --source tap` measures them): from the second tap on, the song plays at the tempo they
+    /// beat, each a quarter note; one odd tap moves nothing. Returns the tempo tapped so far,
+    /// quarter notes a minute (none before there is one).
+    pub fn tap_at(&self, t_us: u64) -> Option<f64> {
+        let mut taps = self.taps.lock().unwrap_or_else(|e| e.into_inner());
+        let cue: Cue = taps.tap.tap(t_us);
+        let action = taps
+            .follower
+            .cue(&Timed { t_us, cue }, self.control.time_map().as_ref());
+        action.apply(&self.control, t_us);
+        taps.follower.bpm()
     }
 
     /// The song.

@@ -9,7 +9,7 @@ use orch_io::OutSpec;
 use orch_perform::{Control, Link, Setup, Tempo};
 use orch_robot::Robot;
 use orch_seq::Song;
-use orch_stage::session::{open_lanes, Session};
+use orch_stage::session::{open_lanes, Refused, Session};
 
 #[path = "../../../tests/support/smf.rs"]
 mod smf;
@@ -194,4 +194,89 @@ fn pause_tempo_and_jumps_from_two_threads_at_once_leave_an_account_that_adds_up(
     assert!(report.adds_up(), "{report:?}");
     assert_eq!(report.jumps, 2, "{report:?}");
     assert!(viewer.iter().any(|s| s.paused), "a viewer saw the pause");
+}
+
+/// Waits (at most 10 s) for a snapshot of `session` that `ok` accepts, and gives it.
+fn wait_for(
+    session: &Session,
+    ok: impl Fn(&orch_stage::session::Snapshot) -> bool,
+) -> orch_stage::session::Snapshot {
+    let t0 = Instant::now();
+    loop {
+        if let Some(s) = session.snapshot().filter(|s| ok(s)) {
+            return s;
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(10),
+            "never came: {:?}",
+            session.snapshot()
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
+
+#[test]
+fn a_jump_to_a_bar_lands_there_and_a_bar_the_song_lacks_is_refused_changing_nothing() {
+    let lanes = open_lanes(vec![OutSpec::parse("sim").unwrap()], &setup()).unwrap();
+    // 6 bars of 4/4 at 120 BPM: 12 s.
+    let session = Session::start(
+        Song::parse(&smf::quarters_smf(24, 120.0)).unwrap(),
+        lanes,
+        Control::new(),
+        Instant::now(),
+    );
+    wait_for(&session, |s| s.notes_sent > 0);
+    assert_eq!(
+        session.jump_to_bar(7),
+        Err(Refused::NoSuchBar { bar: 7, last: 6 })
+    );
+    assert_eq!(
+        session.jump_to_bar(0).unwrap_err().to_string(),
+        "bar 0: the song has bars 1 to 6"
+    );
+    assert_eq!(session.jump_to_bar(5), Ok(8_000_000));
+    let s = wait_for(&session, |s| s.bar >= 5);
+    assert_eq!(s.bar, 5, "landed at the start of bar 5: {s:?}");
+    assert_eq!(s.beat, 1);
+    session.control().stop();
+    let finished = session.finish();
+    let report = finished.ended[0].played.report(None);
+    assert_eq!(
+        report.jumps, 1,
+        "the refused jumps changed nothing: {report:?}"
+    );
+    assert!(report.adds_up());
+}
+
+#[test]
+fn taps_a_quarter_of_a_second_apart_set_twice_the_written_tempo_and_a_bad_factor_is_refused() {
+    let lanes = open_lanes(vec![OutSpec::parse("sim").unwrap()], &setup()).unwrap();
+    let origin = Instant::now();
+    let session = Session::start(
+        Song::parse(&smf::quarters_smf(40, 120.0)).unwrap(),
+        lanes,
+        Control::new(),
+        origin,
+    );
+    wait_for(&session, |s| s.notes_sent > 0);
+    assert_eq!(session.set_tempo(0.0), Err(Refused::Tempo(0.0)));
+    assert_eq!(session.set_tempo(21.0), Err(Refused::Tempo(21.0)));
+    assert!(session.set_tempo(f64::NAN).is_err());
+    assert_eq!(session.set_tempo(0.5).map(|t| t.get()), Ok(0.5));
+    wait_for(&session, |s| s.tempo == 0.5);
+    // Four taps 250 ms apart (240 BPM) on a song written at 120 BPM, the last one now (a
+    // second or more into the performance).
+    std::thread::sleep(Duration::from_secs(1));
+    let now = origin.elapsed().as_micros() as u64;
+    let mut bpm = None;
+    for i in 0..4u64 {
+        bpm = session.tap_at(now - (3 - i) * 250_000);
+    }
+    let bpm = bpm.expect("a tempo tapped");
+    assert!((bpm - 240.0).abs() < 1.0, "{bpm}");
+    let s = wait_for(&session, |s| s.tempo != 0.5);
+    assert!((s.tempo - 2.0).abs() < 0.02, "{s:?}");
+    assert!((s.bpm - 240.0).abs() < 3.0, "{s:?}");
+    session.control().stop();
+    assert!(session.finish().ended[0].played.report(None).adds_up());
 }
