@@ -39,6 +39,35 @@ pub enum Command {
     /// Render the virtual robot's performance of a MIDI file (or, with --score, the file
     /// itself) as sound, through a SoundFont, to a WAV file.
     Render(RenderArgs),
+    /// Serve one web page to pick, analyse and play songs on the robot, live, from a phone
+    /// (see the README's "The web page: `orch serve`").
+    Serve(ServeArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct ServeArgs {
+    /// The robot's configuration (see `orch config`); the thesis's robot if not given.
+    #[arg(long, value_name = "FILE")]
+    pub robot: Option<PathBuf>,
+    /// Where to play, as many times as there are robots (as `orch play --out`): sim (the
+    /// default), serial:DEVICE, rawmidi:DEVICE, udp:HOST:PORT, i2c:DEVICE, each optionally
+    /// followed by :ch=LIST.
+    #[arg(long = "out", value_name = "OUT")]
+    pub outs: Vec<String>,
+    /// A folder of MIDI files (.mid, .midi) the page offers to pick from; none if not given.
+    #[arg(long, value_name = "DIR")]
+    pub library: Option<PathBuf>,
+    /// The address to listen on. On loopback (the default) anyone on this machine may use
+    /// the page; on any other address (0.0.0.0 for all) a random token is required, printed
+    /// at start in the page's URL. Port 0 takes a free port (the URL says which).
+    #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:8080")]
+    pub listen: std::net::SocketAddr,
+    /// Send every message at its score time instead of early by the key's mechanical delay.
+    #[arg(long)]
+    pub no_compensation: bool,
+    /// Log what the outputs do on standard error; without it only warnings.
+    #[arg(long, short)]
+    pub verbose: bool,
 }
 
 #[derive(Args, Debug)]

@@ -9,6 +9,7 @@
 //! `orch conduct --source camera:/dev/video0`, through orch-baton's own `camera` feature (a
 //! V4L2 camera; the `v4l` crate's bindings are generated with libclang: `libclang-dev`).
 
+pub mod analyst;
 pub mod baton;
 pub mod calibrate;
 pub mod cli;
@@ -23,6 +24,7 @@ pub mod render;
 pub mod robot;
 pub mod roll;
 pub mod run;
+pub mod serve;
 pub mod show;
 pub mod view;
 
@@ -39,5 +41,6 @@ pub fn run(command: cli::Command) -> anyhow::Result<()> {
         cli::Command::Conduct(args) => conduct::run(&args),
         cli::Command::Render(args) => render::run(&args),
         cli::Command::Calibrate(args) => calibrate::run(&args),
+        cli::Command::Serve(args) => serve::run(&args),
     }
 }

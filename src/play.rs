@@ -798,7 +798,7 @@ pub fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
 const LISTED: usize = 20;
 
 /// What will go wrong, in words.
-fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
+pub(crate) fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
     let mut f = Vec::new();
     if !robot.config.guard.enabled {
         f.push(

@@ -1,0 +1,128 @@
+//! # orch-serve: the web page of `orch serve`
+//!
+//! One page, served by the `orch` binary with its assets built in (plain HTML, CSS and
+//! JavaScript, [`include_str!`]'d: no build step), to pick a song (from a library folder, or
+//! uploaded), read what the robot will make of it before it plays (the report, the notes that
+//! will go wrong, the piano roll), play it on the robot and steer it live from a phone (play,
+//! pause, resume, a STOP always in view, jump to a bar, tempo factor, tap tempo, a queue), and
+//! read the report at the end.
+//!
+//! - [`Config`]: what to serve (the robot's setup, the outputs, the library, the address)
+//!   and the [`Analyst`] that reads and analyses songs and words reports (the program's own
+//!   `orch analyze` and `orch play`, so that the page says exactly what they print).
+//! - [`serve`]: binds nothing itself; it serves on a listener the caller bound, until a
+//!   shutdown future resolves, then stops any performance (every key released).
+//! - [`api`]: the JSON API the page itself uses, and the WebSocket of live state (documented
+//!   there and in the README's "The web page: `orch serve`").
+//! - [`guard`]: the security around it, because the robot moves: a token off loopback, the
+//!   `Host` checked (DNS rebinding), commands and WebSocket upgrades from another `Origin`
+//!   refused, commands JSON only, uploads at most [`MAX_UPLOAD`] bytes.
+//! - [`player`]: the songs loaded, the queue, the performance playing (an
+//!   [`orch_stage::session::Session`]) and the state every viewer is sent.
+//!
+//! Errors are [`ServeError`] (the server could not run). What a request gets wrong is
+//! answered to it (`{"error": "..."}` with a 4xx status) and changes nothing.
+
+pub mod api;
+pub mod guard;
+pub mod player;
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use orch_io::OutSpec;
+use orch_perform::Setup;
+use orch_seq::Song;
+use orch_stage::session::Finished;
+
+pub use guard::Access;
+
+/// The largest upload taken: 16 MiB (larger gets 413 Payload Too Large).
+pub const MAX_UPLOAD: usize = 16 << 20;
+
+/// A song read and analysed: what the page shows before it plays.
+#[derive(Clone)]
+pub struct Analysis {
+    /// The song, to play.
+    pub song: Song,
+    /// The analysis as `orch analyze --json` prints it (the report, `went_wrong`).
+    pub json: serde_json::Value,
+    /// The analysis as `orch analyze` prints it (the findings, the notes that will go wrong,
+    /// the report).
+    pub text: String,
+    /// The piano roll, SVG (as `orch analyze --svg` writes it).
+    pub svg: String,
+}
+
+/// What the server asks of the program around it: reading and analysing a song exactly as
+/// `orch play` and `orch analyze` do, and the report at the end as `orch play` prints it.
+pub trait Analyst: Send + Sync + 'static {
+    /// Reads `bytes` (a file called `name`) as strictly as `orch play` reads a file, and
+    /// analyses it. A file that cannot be played is `Err` with the message `orch play` gives.
+    fn analyze(&self, name: &str, bytes: &[u8]) -> Result<Analysis, String>;
+
+    /// The report of a performance of `name` that ended (played out or stopped), as `orch
+    /// play` prints it, and as its `--json` prints it.
+    fn report(&self, name: &str, finished: &Finished) -> (String, serde_json::Value);
+}
+
+/// What `orch serve` serves.
+pub struct Config {
+    /// How the robot plays (its configuration, the virtual robot's figures, compensation);
+    /// its tempo is the factor a play starts at until the page sets one.
+    pub setup: Setup,
+    /// The outputs: one robot each (the virtual robot alone when there is just `sim`).
+    pub outs: Vec<OutSpec>,
+    /// The folder of songs to pick from (`.mid` and `.midi` files in it), if any.
+    pub library: Option<PathBuf>,
+    /// Who may come in (the address listened on, the token).
+    pub access: Access,
+    /// Reads and analyses songs, and words reports.
+    pub analyst: Arc<dyn Analyst>,
+}
+
+/// Why the server could not run.
+#[derive(Debug)]
+pub enum ServeError {
+    /// Serving failed (the listener).
+    Io(std::io::Error),
+}
+
+impl std::fmt::Display for ServeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ServeError::Io(e) => write!(f, "serving the page: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for ServeError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            ServeError::Io(e) => Some(e),
+        }
+    }
+}
+
+/// Serves the page and its API on `listener` (bound by the caller, at `config.access`'s
+/// address) until `shutdown` resolves; then stops any performance, every key released, and
+/// waits for it to end.
+pub async fn serve(
+    listener: tokio::net::TcpListener,
+    config: Config,
+    shutdown: impl std::future::Future<Output = ()> + Send + 'static,
+) -> Result<(), ServeError> {
+    let players = player::Player::new(config);
+    let router = api::router(Arc::clone(&players));
+    let result = axum::serve(
+        listener,
+        router.into_make_service_with_connect_info::<SocketAddr>(),
+    )
+    .with_graceful_shutdown(shutdown)
+    .await
+    .map_err(ServeError::Io);
+    let p = Arc::clone(&players);
+    let _ = tokio::task::spawn_blocking(move || p.shut_down()).await;
+    result
+}
