@@ -75,7 +75,7 @@ impl Access {
         }
         let ip = self.addr.ip();
         match name.parse::<IpAddr>() {
-            Ok(asked) => asked == ip || (ip.is_unspecified() && !asked.is_unspecified()),
+            Ok(asked) => !asked.is_unspecified() && (asked == ip || ip.is_unspecified()),
             Err(_) => {
                 name.eq_ignore_ascii_case("localhost") && (ip.is_loopback() || ip.is_unspecified())
             }
