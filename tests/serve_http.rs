@@ -1,0 +1,295 @@
+//! `orch serve` at the HTTP level, as an attacker or a script would reach it: off loopback a
+//! token or 401; a foreign `Host` (DNS rebinding) refused; a command or a WebSocket upgrade
+//! from another `Origin` refused; commands JSON only; an upload over 16 MiB is 413 and the
+//! server goes on serving; a malformed file is refused with `orch play`'s message, changing
+//! nothing; the API's commands acknowledged with the new state.
+
+#[path = "support/serve.rs"]
+mod serve;
+mod support;
+
+use serve::{request, Served};
+
+const WS_UPGRADE: [&str; 4] = [
+    "Connection: Upgrade",
+    "Upgrade: websocket",
+    "Sec-WebSocket-Version: 13",
+    "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==",
+];
+
+/// The shared corpus of real MIDI files, beside the checkout.
+fn corpus_dir() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/midi")
+}
+
+#[test]
+fn off_loopback_every_request_without_the_token_is_401_and_with_it_the_page_comes() {
+    let s = Served::start(&["--listen", "0.0.0.0:0"]);
+    let token = s.token.clone().expect("a token off loopback");
+    assert_eq!(token.len(), 32);
+    assert!(s.url.contains(&format!("?token={token}")), "{}", s.url);
+    for path in ["/", "/api/state", "/assets/app.js", "/api/library"] {
+        let (status, body) = s.request("GET", path, &[], b"");
+        assert_eq!(status, 401, "GET {path} without the token: {body}");
+        let wrong = format!("{path}?token=0123{}", &token[4..]);
+        let (status, _) = s.request("GET", &wrong, &[], b"");
+        assert_eq!(status, 401, "GET {path} with a wrong token");
+    }
+    let (status, _) = s.request(
+        "POST",
+        "/api/command",
+        &["Content-Type: application/json"],
+        br#"{"cmd":"stop"}"#,
+    );
+    assert_eq!(status, 401);
+    let (status, _) = s.request("GET", "/api/ws", &WS_UPGRADE, b"");
+    assert_eq!(status, 401);
+    // The URL printed, a bearer token, the cookie the page is given.
+    let (status, body) = s.request("GET", &format!("/?token={token}"), &[], b"");
+    assert_eq!(status, 200);
+    assert!(body.contains("data-testid=\"stop\""));
+    let bearer = format!("Authorization: Bearer {token}");
+    let (status, _) = s.request("GET", "/api/state", &[&bearer], b"");
+    assert_eq!(status, 200);
+    let cookie = format!("Cookie: orch_token={token}");
+    let (status, _) = s.request("GET", "/assets/app.js", &[&cookie], b"");
+    assert_eq!(status, 200);
+    // The page's own address on loopback is this machine's too: its Host is let in.
+    let (status, _) = request(
+        s.addr,
+        &format!("localhost:{}", s.addr.port()),
+        "GET",
+        "/api/state",
+        &[&bearer],
+        b"",
+    );
+    assert_eq!(status, 200);
+}
+
+#[test]
+fn loopback_asks_no_token_but_a_foreign_host_or_origin_is_refused() {
+    let s = Served::start(&["--listen", "127.0.0.1:0"]);
+    assert_eq!(s.token, None);
+    let port = s.addr.port();
+    let (status, body) = s.request("GET", "/", &[], b"");
+    assert_eq!(status, 200, "{body}");
+    // DNS rebinding: a page of evil.example whose name now points here sends its own Host.
+    for host in [
+        format!("evil.example:{port}"),
+        "127.0.0.1".into(),
+        format!("127.0.0.1:{}", port + 1),
+        format!("0.0.0.0:{port}"),
+    ] {
+        let (status, body) = request(s.addr, &host, "GET", "/api/state", &[], b"");
+        assert_eq!(status, 403, "Host {host}: {body}");
+        assert!(body.contains("refused"), "{body}");
+    }
+    let (status, _) = request(
+        s.addr,
+        &format!("localhost:{port}"),
+        "GET",
+        "/api/state",
+        &[],
+        b"",
+    );
+    assert_eq!(status, 200);
+    // A command from another page is refused; from the page itself it is taken (409: nothing
+    // is playing to pause).
+    for origin in [
+        "http://evil.example",
+        "null",
+        &format!("http://127.0.0.1:{}", port + 1),
+        &format!("https://127.0.0.1:{port}"),
+    ] {
+        let (status, body) = s.request(
+            "POST",
+            "/api/command",
+            &[
+                "Content-Type: application/json",
+                &format!("Origin: {origin}"),
+            ],
+            br#"{"cmd":"pause"}"#,
+        );
+        assert_eq!(status, 403, "Origin {origin}: {body}");
+    }
+    let (status, body) = s.command(r#"{"cmd":"pause"}"#);
+    assert_eq!(status, 409, "{body}");
+    assert_eq!(body["error"], "nothing is playing");
+    // A WebSocket upgrade from another page too; from the page itself it is switched.
+    let evil: Vec<&str> = WS_UPGRADE
+        .iter()
+        .copied()
+        .chain(["Origin: http://evil.example"])
+        .collect();
+    let (status, _) = s.request("GET", "/api/ws", &evil, b"");
+    assert_eq!(status, 403);
+    let own = format!("Origin: http://{}", s.host);
+    let ours: Vec<&str> = WS_UPGRADE.iter().copied().chain([own.as_str()]).collect();
+    let mut ws = std::net::TcpStream::connect(s.addr).unwrap();
+    use std::io::{Read, Write};
+    let mut head = format!("GET /api/ws HTTP/1.1\r\nHost: {}\r\n", s.host);
+    for h in &ours {
+        head += &format!("{h}\r\n");
+    }
+    ws.write_all(format!("{head}\r\n").as_bytes()).unwrap();
+    ws.set_read_timeout(Some(std::time::Duration::from_secs(30)))
+        .unwrap();
+    let mut got = [0u8; 12];
+    ws.read_exact(&mut got).unwrap();
+    assert_eq!(&got, b"HTTP/1.1 101", "the page's own upgrade is switched");
+    // Commands are JSON only: a form's types are refused.
+    for kind in [
+        "text/plain",
+        "application/x-www-form-urlencoded",
+        "multipart/form-data; boundary=x",
+    ] {
+        let (status, body) = s.request(
+            "POST",
+            "/api/command",
+            &[&format!("Content-Type: {kind}")],
+            br#"{"cmd":"pause"}"#,
+        );
+        assert_eq!(status, 415, "{kind}: {body}");
+        let (status, body) = s.request(
+            "POST",
+            "/api/songs?name=x.mid",
+            &[&format!("Content-Type: {kind}")],
+            &support::quarters_smf(4, 120.0),
+        );
+        assert_eq!(status, 415, "upload as {kind}: {body}");
+    }
+    let (status, body) = s.request(
+        "POST",
+        "/api/command",
+        &["Content-Type: application/json"],
+        br#"{"cmd":"launch"}"#,
+    );
+    assert_eq!(status, 422, "{body}");
+}
+
+#[test]
+fn an_upload_over_16_mib_is_413_and_the_server_goes_on_serving() {
+    let s = Served::start(&["--listen", "127.0.0.1:0"]);
+    let octets = ["Content-Type: application/octet-stream"];
+    // Announced too large: refused before it is read.
+    let big = vec![0u8; (16 << 20) + 1];
+    let (status, body) = s.request("POST", "/api/songs?name=big.mid", &octets, &big);
+    assert_eq!(status, 413, "{body}");
+    assert!(body.contains("16 MiB"), "{body}");
+    // Sent in chunks with no length given: refused once it has gone past.
+    let (status, body) = s.request(
+        "POST",
+        "/api/songs?name=big.mid",
+        &[
+            "Content-Type: application/octet-stream",
+            "Transfer-Encoding: chunked",
+        ],
+        &chunked(&big),
+    );
+    assert_eq!(status, 413, "{body}");
+    // Just at the limit: read, and refused as what it is (not a MIDI file).
+    let mut at_limit = b"MThd".to_vec();
+    at_limit.resize(16 << 20, 0);
+    let (status, body) = s.request("POST", "/api/songs?name=huge.mid", &octets, &at_limit);
+    assert_eq!(status, 400, "{body}");
+    // Still serving, and a good song after all that.
+    let (status, _) = s.request("GET", "/", &[], b"");
+    assert_eq!(status, 200);
+    let (status, body) = s.request(
+        "POST",
+        "/api/songs?name=quarters.mid",
+        &octets,
+        &support::quarters_smf(8, 240.0),
+    );
+    assert_eq!(status, 200, "{body}");
+    let song: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(song["analysis"]["notes"], 8);
+}
+
+/// `body` in HTTP/1.1 chunks of 64 KiB.
+fn chunked(body: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    for c in body.chunks(64 * 1024) {
+        out.extend_from_slice(format!("{:x}\r\n", c.len()).as_bytes());
+        out.extend_from_slice(c);
+        out.extend_from_slice(b"\r\n");
+    }
+    out.extend_from_slice(b"0\r\n\r\n");
+    out
+}
+
+#[test]
+fn a_malformed_file_gets_orch_plays_message_and_changes_nothing() {
+    let dir = corpus_dir();
+    let s = Served::start(&[
+        "--listen",
+        "127.0.0.1:0",
+        "--library",
+        dir.to_str().unwrap(),
+    ]);
+    let library = s.get_json("/api/library");
+    let files: Vec<&str> = library["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_str().unwrap())
+        .collect();
+    assert!(files.contains(&"bad-header-magic.mid"), "{files:?}");
+    let before = s.get_json("/api/state");
+    for bad in files.iter().filter(|f| f.starts_with("bad-")) {
+        let bytes = std::fs::read(dir.join(bad)).unwrap();
+        let (status, body) = s.request(
+            "POST",
+            &format!("/api/songs?name={bad}"),
+            &["Content-Type: audio/midi"],
+            &bytes,
+        );
+        let play = std::process::Command::new(env!("CARGO_BIN_EXE_orch"))
+            .args(["play", "--fast", "--json"])
+            .arg(dir.join(bad))
+            .output()
+            .unwrap();
+        let said = String::from_utf8_lossy(&play.stderr);
+        if play.status.code() == Some(2) {
+            assert_eq!(status, 400, "{bad}: {body}");
+            let error: serde_json::Value = serde_json::from_str(&body).unwrap();
+            let message = error["error"].as_str().unwrap();
+            // orch play names the file by its path, the page by its name.
+            let path = dir.join(bad).display().to_string();
+            assert_eq!(
+                said.trim(),
+                format!("orch: error: {}", message.replace(bad, &path)),
+                "{bad}"
+            );
+        } else {
+            assert_eq!(
+                status, 200,
+                "{bad}: orch play takes it ({said}), so does the page: {body}"
+            );
+        }
+    }
+    // The library's too, by name, and a name it does not list is not read.
+    let (status, body) = s.request(
+        "POST",
+        "/api/library",
+        &["Content-Type: application/json"],
+        br#"{"name":"bad-header-magic.mid"}"#,
+    );
+    assert_eq!(status, 400, "{body}");
+    assert!(body.contains("instead of MThd"), "{body}");
+    let (status, _) = s.request(
+        "POST",
+        "/api/library",
+        &["Content-Type: application/json"],
+        br#"{"name":"../shared/midi/bach-bwv847.mid"}"#,
+    );
+    assert_eq!(status, 404);
+    let after = s.get_json("/api/state");
+    let loaded = after["songs"].as_array().unwrap().len();
+    assert_eq!(before["playing"], after["playing"]);
+    assert_eq!(before["queue"], after["queue"]);
+    assert!(
+        loaded < files.iter().filter(|f| f.starts_with("bad-")).count(),
+        "the refused files were not loaded"
+    );
+}
