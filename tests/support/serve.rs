@@ -2,6 +2,8 @@
 //! plain HTTP/1.1 client for the API (any `Host`, `Origin` or body, as a browser or an
 //! attacker would send them), and stopped (SIGTERM) when dropped.
 
+#![allow(dead_code)]
+
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::process::{Child, Command, Stdio};
