@@ -21,7 +21,6 @@ pub mod interpret;
 pub mod play;
 pub mod render;
 pub mod robot;
-pub mod roll;
 pub mod run;
 pub mod show;
 pub mod view;

@@ -213,7 +213,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             )));
         }
     }
-    let robot = crate::play::load_robot(args.robot.as_deref())?;
+    let robot = orch_stage::load_robot(args.robot.as_deref())?;
     robot.interpreter()?;
     let out = LiveBoards::open(&out_spec, &robot).map_err(live_err)?;
     let show = out.is_sim() && !args.json && !args.no_view && std::io::stdout().is_terminal();
