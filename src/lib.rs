@@ -15,14 +15,12 @@ pub mod cli;
 pub mod conduct;
 pub mod decode;
 pub mod error;
-pub mod hex;
 pub mod input;
 pub mod interpret;
 pub mod play;
 pub mod render;
 pub mod robot;
 pub mod run;
-pub mod show;
 pub mod view;
 
 /// Runs one command.

@@ -94,14 +94,6 @@ fn live_err(e: LiveError) -> anyhow::Error {
     }
 }
 
-/// One board write as `orch interpret --json` prints it.
-fn write_line(w: &BoardWrite) -> serde_json::Value {
-    match w.duty {
-        Some(duty) => json!({"t_us": w.t_us, "byte": w.byte, "address": w.address, "duty": duty}),
-        None => json!({"t_us": w.t_us, "byte": w.byte, "address": w.address, "outputs": w.outputs}),
-    }
-}
-
 impl Runner {
     fn flush_log(&mut self) {
         if let Some(w) = &self.json {
@@ -236,7 +228,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         Box::new(move |write: &BoardWrite| {
             let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
             // Standard output gone (a closed pipe): the robot plays on without the log.
-            let _ = writeln!(w, "{}", write_line(write));
+            let _ = writeln!(w, "{}", orch_stage::writes::json(write));
         }) as Box<dyn FnMut(&BoardWrite) + Send>
     });
     let din = matches!(input, InTarget::Serial(_));

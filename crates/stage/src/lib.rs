@@ -53,17 +53,22 @@
 pub mod account;
 pub mod analysis;
 pub mod bars;
+pub mod bytes;
 pub mod error;
 pub mod findings;
 pub mod framer;
+pub mod hex;
+pub mod interpret;
 pub mod live;
 pub mod load;
+pub mod messages;
 pub mod report;
 pub mod session;
 pub mod setup;
 pub mod sources;
 pub mod text;
 pub mod thru;
+pub mod writes;
 
 pub use analysis::{analyze, Analysis, Wrong};
 pub use error::{LiveError, SourceError, StageError};
