@@ -63,6 +63,7 @@ pub mod live;
 pub mod load;
 pub mod messages;
 pub mod report;
+pub mod run;
 pub mod session;
 pub mod setup;
 pub mod sources;
