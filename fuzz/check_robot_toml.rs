@@ -1,6 +1,6 @@
 //! The invariants the `robot_toml` fuzz target checks, shared with the stable-Rust test
 //! `tests/fuzz_replay.rs` (the `orch` package), which replays the corpus and the regressions
-//! with it. Plain Rust: depends on `orch`, `orch_robot` and `std` only, so both can include
+//! with it. Plain Rust: depends on `orch_stage`, `orch_robot` and `std` only, so both can include
 //! it with `#[path]`.
 //!
 //! An input is text: bytes that are not UTF-8 are replaced (U+FFFD), so every input is
@@ -9,14 +9,14 @@
 //! - `orch_robot::Robot::from_toml` (a `robot.toml`) returns, `Ok` or `Err`, and never
 //!   panics; on `Ok` the robot is usable: `interpreter()` builds, `sim_config()` has as many
 //!   boards as the robot, `write_micros()` is a positive finite time;
-//! - `orch::hex::parse_line` (the `--hex` input), line by line, returns and never panics; a
+//! - `orch_stage::hex::parse_line` (the `--hex` input), line by line, returns and never panics; a
 //!   line it accepts, written back as plain hex pairs, parses to the same bytes, and so do
 //!   the same bytes written as `0x`-prefixed, comma-separated tokens with a comment.
 
 use std::fmt::Write;
 
-use orch::hex::parse_line;
 use orch_robot::Robot;
+use orch_stage::hex::parse_line;
 
 /// Checks every invariant on one input. Panics on a violation.
 pub fn check(data: &[u8]) {

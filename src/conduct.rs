@@ -28,10 +28,10 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
              --no-view",
         ));
     }
-    let song = play::load_song(&args.file)?;
+    let song = orch_stage::load_song(&args.file)?;
     let from_us = play::from_bar(&song, args.from)?;
-    let robot = play::load_robot(args.robot.as_deref())?;
-    let setup = play::setup(&robot, !args.no_compensation, Tempo::NORMAL);
+    let robot = orch_stage::load_robot(args.robot.as_deref())?;
+    let setup = orch_stage::setup::setup(&robot, !args.no_compensation, Tempo::NORMAL);
     let lanes = play::open_lanes(play::out_specs(&args.outs)?, &setup)?;
     let follow_mode = match args.follow {
         FollowMode::Immediate => Follow::Immediate,

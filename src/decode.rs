@@ -1,63 +1,45 @@
-//! `orch decode`: raw MIDI bytes in, one message per line out, then the counters.
+//! `orch decode`: raw MIDI bytes in, one message per line out, then the counters. The
+//! decoding and the formats are `orch_stage::messages`'; here: reading and printing.
 
 use std::io::{self, BufWriter, Write};
 
-use orch_core::{Decoder, Message};
+use orch_core::Message;
+use orch_stage::messages::{self as show, Messages};
 
 use crate::cli::DecodeArgs;
 use crate::input;
-use crate::show::{self, Shown};
-
-/// How much of a System Exclusive message's payload is kept and shown: the first 1 MiB. A
-/// longer one is shown with its first 1 MiB and its full length (text: "... (N more not
-/// shown)"; JSON: a `"length"` beside `"data"`), so memory stays bounded however long it is.
-pub const SYSEX_SHOWN: usize = 1 << 20;
 
 pub fn run(args: &DecodeArgs) -> anyhow::Result<()> {
     let stdout = io::stdout();
     let mut out = BufWriter::new(stdout.lock());
-    let mut decoder = Decoder::<0>::new();
-    // The decoder keeps no SysEx payload: every data byte between a SysExStart and the SysEx
-    // end is payload, and the command keeps the first SYSEX_SHOWN of them itself.
-    let mut sysex: Vec<u8> = Vec::new();
+    let mut messages = Messages::new();
     let json = args.source.json;
     input::for_each_chunk(&args.source, |bytes| {
         for &byte in bytes {
-            if decoder.in_sysex() && byte < 0x80 && sysex.len() < SYSEX_SHOWN {
-                sysex.push(byte);
-            }
-            for message in decoder.push(byte) {
-                match message {
-                    Message::SysExStart => sysex.clear(),
+            messages.push(byte, |shown| -> io::Result<()> {
+                match shown.message {
+                    Message::SysExStart => Ok(()),
+                    // A payload is written straight from its bytes (up to 1 MiB of them).
+                    Message::SysEx { len, .. } if json => {
+                        show::write_sysex_json(&mut out, shown.sysex, len)?;
+                        writeln!(out)
+                    }
                     Message::SysEx { len, terminated } => {
-                        if json {
-                            show::write_sysex_json(&mut out, &sysex, len)?;
-                        } else {
-                            show::write_sysex_text(&mut out, &sysex, len, terminated)?;
-                        }
-                        writeln!(out)?;
+                        show::write_sysex_text(&mut out, shown.sysex, len, terminated)?;
+                        writeln!(out)
                     }
-                    _ => {
-                        let shown = Shown {
-                            message,
-                            sysex: &sysex,
-                        };
-                        if json {
-                            if let Some(value) = show::json(&shown) {
-                                writeln!(out, "{value}")?;
-                            }
-                        } else {
-                            writeln!(out, "{}", show::text(&shown))?;
-                        }
-                    }
+                    _ if json => match show::json(&shown) {
+                        Some(value) => writeln!(out, "{value}"),
+                        None => Ok(()),
+                    },
+                    _ => writeln!(out, "{}", show::text(&shown)),
                 }
-            }
+            })?;
         }
         out.flush()?;
         Ok(())
     })?;
-    let truncated = decoder.finish();
-    let c = decoder.counters();
+    let (c, truncated) = messages.finish();
     if json {
         writeln!(out, "{}", show::counters_json(&c, truncated))?;
     } else {

@@ -19,12 +19,19 @@ pub fn bad_input(message: impl Into<String>) -> anyhow::Error {
     anyhow::Error::new(BadInput(message.into()))
 }
 
-/// 2 for bad input anywhere in the chain (a [`BadInput`], or a robot configuration that was
-/// refused: [`orch_robot::RobotError`]), 1 otherwise.
+/// 2 for bad input anywhere in the chain (a [`BadInput`], a robot configuration that was
+/// refused: [`orch_robot::RobotError`], or a song, bar or tempo refused:
+/// [`orch_stage::StageError`], hex text that is not: [`orch_stage::bytes::ReadError`]), 1
+/// otherwise.
 pub fn exit_code(e: &anyhow::Error) -> u8 {
-    if e.chain()
-        .any(|c| c.is::<BadInput>() || c.is::<orch_robot::RobotError>())
-    {
+    if e.chain().any(|c| {
+        c.is::<BadInput>()
+            || c.is::<orch_robot::RobotError>()
+            || c.downcast_ref::<orch_stage::StageError>()
+                .is_some_and(orch_stage::StageError::is_bad_input)
+            || c.downcast_ref::<orch_stage::bytes::ReadError>()
+                .is_some_and(orch_stage::bytes::ReadError::is_bad_input)
+    }) {
         2
     } else {
         1

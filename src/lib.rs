@@ -9,23 +9,19 @@
 //! `orch conduct --source camera:/dev/video0`, through orch-baton's own `camera` feature (a
 //! V4L2 camera; the `v4l` crate's bindings are generated with libclang: `libclang-dev`).
 
-pub mod analyst;
 pub mod baton;
 pub mod calibrate;
 pub mod cli;
 pub mod conduct;
 pub mod decode;
 pub mod error;
-pub mod hex;
 pub mod input;
 pub mod interpret;
 pub mod play;
 pub mod render;
 pub mod robot;
-pub mod roll;
 pub mod run;
 pub mod serve;
-pub mod show;
 pub mod view;
 
 /// Runs one command.

@@ -11,7 +11,8 @@ use orch_render::{events, soundfont, synth, wav::WavOut, RenderError, Settings};
 
 use crate::cli::RenderArgs;
 use crate::error::bad_input;
-use crate::play::{load_robot, load_song, render as perform_fast, setup};
+use orch_stage::setup::{play_fast, setup};
+use orch_stage::{load_robot, load_song};
 
 /// The user's input at fault (a soundfont, a rate) exits 2, anything else 1.
 fn lift(e: RenderError) -> anyhow::Error {
@@ -39,7 +40,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         let mut setup = setup(&robot, true, Tempo::NORMAL);
         // The sounds' key-ups are needed, not only the presses.
         setup.sim.keep = orch_sim::Keep::Everything;
-        let played = perform_fast(&song, &setup)?;
+        let played = play_fast(&song, &setup)?;
         let keys = events::from_performance(
             &played.performance,
             played.start_us,

@@ -3,56 +3,31 @@
 //! interpreter and guard, finger boards out (the virtual robot, or PCA9555 and PCA9685 boards
 //! on the host's I2C bus), and the stream passed through to other MIDI outputs (`--thru`).
 //!
-//! The live interpreter loop's state and steps are `orch-stage`'s ([`LiveRobot`]); here: the
-//! arguments, the input and signals, the loop that waits on them with the guard's next
-//! deadline as its timeout (so the watchdog lets go of every key when the input goes silent),
-//! the messages, the JSON log and the live view.
+//! The live robot and its loop are `orch-stage`'s ([`LiveRobot`], [`orch_stage::run`]); here:
+//! the arguments, the signals, the messages, the JSON log and the live view.
 
 use std::io::{BufWriter, IsTerminal, Write};
-use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
+use std::sync::atomic::{AtomicI32, Ordering};
+use std::sync::mpsc::{self, Sender};
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant as Wall};
+use std::time::Duration;
 
-use orch_io::{InEvent, InTarget, MidiIn, OutSpec, Target};
+use orch_io::{InTarget, MidiIn, OutSpec, Target};
+use orch_stage::run::{counters, End, Event, Loop, Said};
 use orch_stage::thru::Thru;
 use orch_stage::{BoardWrite, LiveBoards, LiveError, LiveRobot, ReloadRefused};
 use serde_json::json;
 
 use crate::cli::RunArgs;
 use crate::error::bad_input;
-use crate::robot::Robot;
 use crate::view::{Scene, View};
 
-/// What the main loop waits for.
-#[derive(Debug)]
-pub enum Event {
-    /// From the input's reader.
-    In(InEvent),
-    /// A signal arrived.
-    Signal(i32),
-}
-
-impl From<InEvent> for Event {
-    fn from(e: InEvent) -> Self {
-        Event::In(e)
-    }
-}
-
-fn init_logging(verbose: bool) {
-    let level = if verbose {
-        tracing::Level::DEBUG
-    } else {
-        tracing::Level::WARN
-    };
-    let _ = tracing_subscriber::fmt()
-        .with_writer(std::io::stderr)
-        .with_max_level(level)
-        .with_target(false)
-        .try_init();
-}
-
-/// Forwards SIGINT, SIGTERM, SIGHUP and SIGUSR1 into the main loop's channel.
-fn forward_signals(tx: Sender<Event>) -> anyhow::Result<signal_hook::iterator::Handle> {
+/// Forwards SIGINT, SIGTERM, SIGHUP and SIGUSR1 into the loop's channel; a signal that stops
+/// it is kept in `stopped_by`.
+fn forward_signals(
+    tx: Sender<Event>,
+    stopped_by: Arc<AtomicI32>,
+) -> anyhow::Result<signal_hook::iterator::Handle> {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM, SIGUSR1};
     let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP, SIGUSR1])?;
     let handle = signals.handle();
@@ -60,30 +35,20 @@ fn forward_signals(tx: Sender<Event>) -> anyhow::Result<signal_hook::iterator::H
         .name("orch-signals".into())
         .spawn(move || {
             for s in signals.forever() {
-                if tx.send(Event::Signal(s)).is_err() {
+                let event = match s {
+                    SIGHUP => Event::Reload,
+                    SIGUSR1 => Event::Counters,
+                    _ => {
+                        stopped_by.store(s, Ordering::SeqCst);
+                        Event::Stop
+                    }
+                };
+                if tx.send(event).is_err() {
                     return;
                 }
             }
         })?;
     Ok(handle)
-}
-
-/// Why the run ended.
-enum End {
-    Input,
-    Signal(i32),
-    Quit,
-    Failed(anyhow::Error),
-}
-
-/// The loop's own state beside the live robot: what it says and how it shows it.
-struct Runner {
-    live: LiveRobot,
-    robot_path: Option<std::path::PathBuf>,
-    /// The input's name, for messages.
-    input_name: String,
-    /// The JSON log, shared with the live robot's write log.
-    json: Option<Arc<Mutex<BufWriter<std::io::Stdout>>>>,
 }
 
 /// A live robot's error as the binary says it: bad input exits 2.
@@ -94,108 +59,69 @@ fn live_err(e: LiveError) -> anyhow::Error {
     }
 }
 
-/// One board write as `orch interpret --json` prints it.
-fn write_line(w: &BoardWrite) -> serde_json::Value {
-    match w.duty {
-        Some(duty) => json!({"t_us": w.t_us, "byte": w.byte, "address": w.address, "duty": duty}),
-        None => json!({"t_us": w.t_us, "byte": w.byte, "address": w.address, "outputs": w.outputs}),
+/// What the loop says, on standard error.
+fn say(said: Said, input: &str) {
+    let restart = "restart orch run for that; the robot stays as it was";
+    match said {
+        Said::TookOver => eprintln!("orch: the new robot configuration is in force"),
+        Said::Lost(e) => eprintln!(
+            "orch: --in {input}: the device went away ({e}); every key released; it is tried \
+             again every {} ms",
+            orch_io::RECONNECT_EVERY.as_millis()
+        ),
+        Said::Back => eprintln!("orch: --in {input}: the device is back"),
+        Said::Counters(c) => eprintln!("orch run: {c}"),
+        Said::NoFile => {
+            eprintln!("orch: SIGHUP: no --robot file to read again; the thesis's robot stays")
+        }
+        Said::Refused(path, e) => eprintln!(
+            "orch: SIGHUP: {} refused, the robot stays as it was: {e}",
+            path.display()
+        ),
+        Said::CannotReload(path, ReloadRefused::MovesBoards) => eprintln!(
+            "orch: SIGHUP: {} moves the I2C boards: {restart}",
+            path.display()
+        ),
+        Said::CannotReload(path, ReloadRefused::ChangesKinds) => eprintln!(
+            "orch: SIGHUP: {} changes the kind of a board (PCA9555, PCA9685): {restart}",
+            path.display()
+        ),
+        Said::Read(path) => eprintln!(
+            "orch: SIGHUP: {} read; it takes over when no key is down",
+            path.display()
+        ),
     }
 }
 
-impl Runner {
-    fn flush_log(&mut self) {
-        if let Some(w) = &self.json {
-            if w.lock().unwrap_or_else(|e| e.into_inner()).flush().is_err() {
-                // Standard output gone (a closed pipe): the robot plays on without the log.
-                self.json = None;
-            }
-        }
+/// What the view shows of the live robot.
+fn scene(live: &LiveRobot, title: &str) -> Scene {
+    Scene {
+        command: "orch run",
+        title: title.to_string(),
+        low_note: live.interpreter().config().range.low().get(),
+        down: live.keys_down(),
+        elapsed_s: live.elapsed_s(),
+        notes_sent: live.totals().note_ons,
+        ..Scene::default()
     }
+}
 
-    /// The step's outcome, and the message when a robot read again took over.
-    fn step(&mut self, r: Result<(), LiveError>) -> anyhow::Result<()> {
-        if self.live.took_over() {
-            eprintln!("orch: the new robot configuration is in force");
-        }
-        r.map_err(live_err)
-    }
+/// The JSON log on standard output, shared with the live robot's write log.
+type Log = Arc<Mutex<BufWriter<std::io::Stdout>>>;
 
-    /// SIGHUP: reads robot.toml again; it takes over the first moment every key is up and no
-    /// message is half received, so no held key is dropped; a refused file leaves the old one
-    /// in force.
-    fn reload(&mut self) -> anyhow::Result<()> {
-        let Some(path) = self.robot_path.clone() else {
-            eprintln!("orch: SIGHUP: no --robot file to read again; the thesis's robot stays");
-            return Ok(());
-        };
-        match Robot::load(&path).and_then(|r| r.interpreter().map(|_| r)) {
-            Err(e) => eprintln!(
-                "orch: SIGHUP: {} refused, the robot stays as it was: {e}",
-                path.display()
-            ),
-            Ok(new) => match self.live.reload(new) {
-                Err(ReloadRefused::MovesBoards) => eprintln!(
-                    "orch: SIGHUP: {} moves the I2C boards: restart orch run for that; the \
-                     robot stays as it was",
-                    path.display()
-                ),
-                Err(ReloadRefused::ChangesKinds) => eprintln!(
-                    "orch: SIGHUP: {} changes the kind of a board (PCA9555, PCA9685): restart \
-                     orch run for that; the robot stays as it was",
-                    path.display()
-                ),
-                Ok(()) => eprintln!(
-                    "orch: SIGHUP: {} read; it takes over when no key is down",
-                    path.display()
-                ),
-            },
-        }
-        let r = self.live.apply_pending().map(|_| ());
-        self.step(r)
-    }
-
-    fn counters_line(&self) -> String {
-        let t = self.live.totals();
-        let c = t.counters;
-        let (lost, cut) = self.live.lost();
-        format!(
-            "orch run: {} bytes in {} reads; {} messages; garbage: {} data bytes with no \
-             status, {} messages cut short; {} notes: {} sounded, {} dropped; {} keys cut by \
-             the watchdog; {} board writes; {} keys down; the input's device went away {} times \
-             ({} messages cut off)",
-            c.bytes,
-            self.live.reads(),
-            c.messages,
-            c.dropped,
-            c.abandoned,
-            t.note_ons,
-            t.sounded,
-            t.dropped,
-            t.cut_by_watchdog,
-            self.live.writes(),
-            self.live.interpreter().keys_down(),
-            lost,
-            cut
-        )
-    }
-
-    fn scene(&self, title: &str) -> Scene {
-        let range = self.live.interpreter().config().range;
-        Scene {
-            command: "orch run",
-            title: title.to_string(),
-            low_note: range.low().get(),
-            down: self.live.keys_down(),
-            elapsed_s: self.live.elapsed_s(),
-            notes_sent: self.live.totals().note_ons,
-            ..Scene::default()
+/// Flushes the log; a log whose standard output has gone (a closed pipe) is dropped: the
+/// robot plays on without it.
+fn flush_log(json: &mut Option<Log>) {
+    if let Some(w) = json {
+        if w.lock().unwrap_or_else(|e| e.into_inner()).flush().is_err() {
+            *json = None;
         }
     }
 }
 
 /// `orch run`.
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
-    init_logging(args.verbose);
+    crate::play::init_logging(args.verbose);
     let input = InTarget::parse(&args.input).map_err(|e| bad_input(e.to_string()))?;
     let out_spec = OutSpec::parse(&args.out).map_err(|e| bad_input(e.to_string()))?;
     let thru_specs: Vec<OutSpec> = args
@@ -213,7 +139,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             )));
         }
     }
-    let robot = crate::play::load_robot(args.robot.as_deref())?;
+    let robot = orch_stage::load_robot(args.robot.as_deref())?;
     robot.interpreter()?;
     let out = LiveBoards::open(&out_spec, &robot).map_err(live_err)?;
     let show = out.is_sim() && !args.json && !args.no_view && std::io::stdout().is_terminal();
@@ -224,41 +150,56 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         .map_err(live_err)?;
 
     let (tx, rx) = mpsc::channel::<Event>();
-    let signals = forward_signals(tx.clone())?;
+    let stopped_by = Arc::new(AtomicI32::new(0));
+    let signals = forward_signals(tx.clone(), Arc::clone(&stopped_by))?;
     let midi_in =
         MidiIn::open(&input, tx).map_err(|e| bad_input(format!("--in {}: {e}", args.input)))?;
     tracing::debug!(input = midi_in.name(), "reading");
 
-    let json = args
+    let mut json: Option<Log> = args
         .json
         .then(|| Arc::new(Mutex::new(BufWriter::new(std::io::stdout()))));
     let log = json.clone().map(|w| {
         Box::new(move |write: &BoardWrite| {
             let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
             // Standard output gone (a closed pipe): the robot plays on without the log.
-            let _ = writeln!(w, "{}", write_line(write));
+            let _ = writeln!(w, "{}", orch_stage::writes::json(write));
         }) as Box<dyn FnMut(&BoardWrite) + Send>
     });
     let din = matches!(input, InTarget::Serial(_));
-    let live = LiveRobot::new(robot, out, thru, din, log).map_err(live_err)?;
-    let mut runner = Runner {
-        live,
-        robot_path: args.robot.clone(),
-        input_name: args.input.clone(),
-        json,
-    };
+    let mut live = LiveRobot::new(robot, out, thru, din, log).map_err(live_err)?;
     let priority = orch_perform::realtime::raise_priority();
     tracing::debug!(?priority, "the robot's loop");
     let title = format!("orch run --in {}", args.input);
     let mut view = if show { Some(View::start()?) } else { None };
-    let end = main_loop(&mut runner, &rx, args.verbose, view.as_mut(), &title);
+    let end = {
+        // The view is drawn 30 times a second; without it the loop wakes every 200 ms at
+        // least (lost I2C boards are tried again).
+        let every = Duration::from_millis(if view.is_some() { 33 } else { 200 });
+        let mut after = |live: &LiveRobot| {
+            flush_log(&mut json);
+            let v = view.as_mut()?;
+            if crate::view::quit_requested() {
+                return Some(End::Quit);
+            }
+            let drawn = v.draw(&scene(live, &title));
+            drawn.err().map(|e| End::Front(Box::new(e)))
+        };
+        Loop {
+            robot_path: args.robot.clone(),
+            every,
+            verbose: args.verbose,
+            say: &mut |s| say(s, &args.input),
+            after: &mut after,
+        }
+        .run(&mut live, &rx)
+    };
     drop(view);
     signals.close();
 
-    let stopped = runner.live.stop().map_err(live_err);
-    if let Some(w) = &runner.json {
-        let list: Vec<_> = runner
-            .live
+    let stopped = live.stop().map_err(live_err);
+    if let Some(w) = &json {
+        let list: Vec<_> = live
             .outputs()
             .iter()
             .map(|&(address, outputs)| json!({"address": address, "outputs": outputs}))
@@ -266,99 +207,23 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
         let _ = writeln!(w, "{}", json!({"type": "final", "boards": list}));
     }
-    runner.flush_log();
+    flush_log(&mut json);
     if args.verbose {
-        eprintln!("{}", runner.counters_line());
+        eprintln!("orch run: {}", counters(&live));
     }
     match &end {
-        End::Signal(s) => tracing::debug!(signal = s, "stopped by a signal"),
+        End::Stopped => {
+            let signal = stopped_by.load(Ordering::SeqCst);
+            tracing::debug!(signal, "stopped by a signal");
+        }
         End::Input => tracing::debug!("end of input"),
-        End::Quit | End::Failed(_) => {}
+        _ => {}
     }
     stopped?;
     match end {
-        End::Failed(e) => Err(e),
-        End::Input | End::Signal(_) | End::Quit => Ok(()),
-    }
-}
-
-/// How long the loop waits at most when no timer is due: a live view is drawn 30 times a
-/// second; lost I2C boards are tried again.
-const IDLE_WAIT: Duration = Duration::from_millis(200);
-const VIEW_FRAME: Duration = Duration::from_millis(33);
-
-fn main_loop(
-    r: &mut Runner,
-    rx: &Receiver<Event>,
-    verbose: bool,
-    mut view: Option<&mut View>,
-    title: &str,
-) -> End {
-    use signal_hook::consts::{SIGHUP, SIGUSR1};
-    let mut last_line = Wall::now();
-    let mut activity = false;
-    loop {
-        let mut wait = if view.is_some() {
-            VIEW_FRAME
-        } else {
-            IDLE_WAIT
-        };
-        if let Some(at) = r.live.next_deadline() {
-            wait = wait.min(at.saturating_duration_since(Wall::now()));
-        }
-        let step = match rx.recv_timeout(wait) {
-            Ok(Event::In(InEvent::Bytes { at, bytes })) => {
-                activity = true;
-                let step = r.live.bytes(at, &bytes);
-                r.step(step)
-            }
-            Ok(Event::In(InEvent::End)) => return End::Input,
-            Ok(Event::In(InEvent::Lost(e))) => {
-                eprintln!(
-                    "orch: --in {}: the device went away ({e}); every key released; it is \
-                     tried again every {} ms",
-                    r.input_name,
-                    orch_io::RECONNECT_EVERY.as_millis()
-                );
-                let step = r.live.line_lost();
-                r.step(step)
-            }
-            Ok(Event::In(InEvent::Back)) => {
-                eprintln!("orch: --in {}: the device is back", r.input_name);
-                Ok(())
-            }
-            Ok(Event::In(InEvent::Failed(e))) => {
-                return End::Failed(anyhow::Error::new(e).context("reading the input"))
-            }
-            Ok(Event::Signal(SIGUSR1)) => {
-                eprintln!("{}", r.counters_line());
-                Ok(())
-            }
-            Ok(Event::Signal(SIGHUP)) => r.reload(),
-            Ok(Event::Signal(s)) => return End::Signal(s),
-            Err(RecvTimeoutError::Timeout) => {
-                let step = r.live.tick();
-                r.step(step)
-            }
-            Err(RecvTimeoutError::Disconnected) => return End::Input,
-        };
-        if let Err(e) = step {
-            return End::Failed(e);
-        }
-        r.flush_log();
-        r.live.poll();
-        if verbose && activity && last_line.elapsed() >= Duration::from_secs(1) {
-            eprintln!("{}", r.counters_line());
-            last_line = Wall::now();
-            activity = false;
-        }
-        if let Some(v) = view.as_deref_mut() {
-            if crate::view::quit_requested() {
-                return End::Quit;
-            }
-            if let Err(e) = v.draw(&r.scene(title)) {
-                return End::Failed(anyhow::Error::new(e).context("the live view"));
-            }
-        }
+        End::Input | End::Stopped | End::Quit => Ok(()),
+        End::InputFailed(e) => Err(anyhow::Error::new(e).context("reading the input")),
+        End::Failed(e) => Err(live_err(e)),
+        End::Front(e) => Err(anyhow::anyhow!(e).context("the live view")),
     }
 }

@@ -13,12 +13,12 @@ use orch_serve::{Access, Config};
 
 use crate::cli::ServeArgs;
 use crate::error::bad_input;
-use crate::play::{init_logging, load_robot, out_specs, setup};
+use crate::play::{init_logging, out_specs};
 
 pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     init_logging(args.verbose);
-    let robot = load_robot(args.robot.as_deref())?;
-    let setup = setup(&robot, !args.no_compensation, Tempo::NORMAL);
+    let robot = orch_stage::load_robot(args.robot.as_deref())?;
+    let setup = orch_stage::setup::setup(&robot, !args.no_compensation, Tempo::NORMAL);
     let outs = out_specs(&args.outs)?;
     // Every output opened once at start: one that cannot be is said now, not at the first play.
     drop(crate::play::open_lanes(outs.clone(), &setup)?);
@@ -50,9 +50,10 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         let access = Access::new(addr)?;
         print_urls(&access)?;
         let config = Config {
-            analyst: Arc::new(crate::analyst::Analyst::new(robot, setup.clone())),
+            robot,
             setup,
             outs,
+            named: !args.outs.is_empty(),
             library: args.library.clone(),
             access,
         };

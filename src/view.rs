@@ -3,6 +3,7 @@
 
 use std::io;
 
+use orch_roll::note_name;
 use ratatui::layout::{Constraint, Layout};
 use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
@@ -30,15 +31,6 @@ pub struct Scene {
     pub conductor: Option<String>,
     /// A bar being typed to jump to (digits, then Enter), shown at the end of the head.
     pub prompt: Option<String>,
-}
-
-const NAMES: [&str; 12] = [
-    "C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B",
-];
-
-/// "C4" for 60.
-pub fn note_name(note: u8) -> String {
-    format!("{}{}", NAMES[note as usize % 12], note as i32 / 12 - 1)
 }
 
 fn is_black(note: u8) -> bool {

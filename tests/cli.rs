@@ -163,7 +163,7 @@ fn decode_counts_a_message_cut_off_by_the_end_of_input_as_truncated_not_abandone
 
 #[test]
 fn decode_shows_the_start_and_length_of_a_sysex_longer_than_it_keeps() {
-    let shown = orch::decode::SYSEX_SHOWN;
+    let shown = orch_stage::messages::SYSEX_SHOWN;
     let mut bytes = vec![0xF0];
     bytes.extend((0..shown + 1000).map(|i| (i % 128) as u8));
     bytes.push(0xF7);

@@ -93,7 +93,7 @@ struct Followed {
 fn conduct_with_video(video: &Video, follow: Follow) -> Followed {
     let bpm0 = video.script.from_bpm;
     let song = Song::parse(&support::quarters_smf(video.truth.len() as u32 + 2, bpm0)).unwrap();
-    let setup = orch::play::setup(&orch::robot::Robot::thesis(), true, Tempo::NORMAL);
+    let setup = orch_stage::setup::setup(&orch::robot::Robot::thesis(), true, Tempo::NORMAL);
     let control = Control::new();
     let beats = ScoreBeats::of(&song);
     let mut follower = Follower::new(beats.clone(), follow);

@@ -82,7 +82,7 @@ fn decode_json_reads_a_64_mib_sysex_in_bounded_memory() {
     assert_eq!(sysex["length"], payload);
     assert_eq!(
         sysex["data"].as_array().unwrap().len(),
-        orch::decode::SYSEX_SHOWN
+        orch_stage::messages::SYSEX_SHOWN
     );
     let clock: Value = serde_json::from_str(&lines.next().unwrap().unwrap()).unwrap();
     assert_eq!(clock["type"], "clock");

@@ -83,10 +83,10 @@ fn temp(name: &str) -> PathBuf {
 /// What `orch play` plans for `file` on `link`: every byte, in order.
 fn planned(file: &[u8], link: Link) -> Vec<u8> {
     let song = Song::parse(file).unwrap();
-    let robot = orch::play::load_robot(None).unwrap();
+    let robot = orch_stage::load_robot(None).unwrap();
     let setup = Setup {
         link,
-        ..orch::play::setup(&robot, true, Tempo::NORMAL)
+        ..orch_stage::setup::setup(&robot, true, Tempo::NORMAL)
     };
     let mut rec = MidiRecording::default();
     perform(

@@ -7,9 +7,10 @@
 //! pause, resume, a STOP always in view, jump to a bar, tempo factor, tap tempo, a queue), and
 //! read the report at the end.
 //!
-//! - [`Config`]: what to serve (the robot's setup, the outputs, the library, the address)
-//!   and the [`Analyst`] that reads and analyses songs and words reports (the program's own
-//!   `orch analyze` and `orch play`, so that the page says exactly what they print).
+//! - [`Config`]: what to serve (the robot and its setup, the outputs, the library, the
+//!   address). [`analyze`] reads and analyses a song as `orch play` and `orch analyze` do,
+//!   through `orch-stage`, so that the page says exactly what they print; at the end the
+//!   report is `orch play`'s too.
 //! - [`serve`]: binds nothing itself; it serves on a listener the caller bound, until a
 //!   shutdown future resolves, then stops any performance (every key released).
 //! - [`api`]: the JSON API the page itself uses, and the WebSocket of live state (documented
@@ -33,8 +34,8 @@ use std::sync::Arc;
 
 use orch_io::OutSpec;
 use orch_perform::Setup;
+use orch_robot::Robot;
 use orch_seq::Song;
-use orch_stage::session::Finished;
 
 pub use guard::Access;
 
@@ -55,31 +56,66 @@ pub struct Analysis {
     pub svg: String,
 }
 
-/// What the server asks of the program around it: reading and analysing a song exactly as
-/// `orch play` and `orch analyze` do, and the report at the end as `orch play` prints it.
-pub trait Analyst: Send + Sync + 'static {
-    /// Reads `bytes` (a file called `name`) as strictly as `orch play` reads a file, and
-    /// analyses it. A file that cannot be played is `Err` with the message `orch play` gives.
-    fn analyze(&self, name: &str, bytes: &[u8]) -> Result<Analysis, String>;
+/// Reads `bytes` (a file called `name`) as strictly as `orch play` reads a file, and analyses
+/// it on `robot` as `setup` plays it, as `orch analyze` does. A file that cannot be played is
+/// `Err` with the message `orch play` gives for it.
+pub fn analyze(robot: &Robot, setup: &Setup, name: &str, bytes: &[u8]) -> Result<Analysis, String> {
+    let bytes = orch_stage::load::read_midi(bytes, name, orch_stage::load::MAX_MIDI_FILE_BYTES)
+        .map_err(|e| words(&e))?;
+    let song = orch_stage::load::song(&bytes, name).map_err(|e| words(&e))?;
+    // The roll draws each strike to its key-up: the sound events are kept too.
+    let setup = Setup {
+        sim: orch_sim::SimConfig {
+            keep: orch_sim::Keep::Everything,
+            ..setup.sim.clone()
+        },
+        ..setup.clone()
+    };
+    let (analysis, played) = orch_stage::analyze(&song, robot, &setup).map_err(|e| words(&e))?;
+    let svg = orch_stage::analysis::roll_svg(&song, robot, &played, setup.tempo, name)
+        .map_err(|e| words(&e))?;
+    let text = orch_stage::text::analysis(&analysis, std::path::Path::new(name));
+    // `orch analyze --json`: the report's fields and the notes that went wrong (the findings
+    // are its text's).
+    let mut json = serde_json::to_value(&analysis).map_err(|e| e.to_string())?;
+    if let Some(map) = json.as_object_mut() {
+        map.remove("findings");
+    }
+    Ok(Analysis {
+        song,
+        json,
+        text,
+        svg,
+    })
+}
 
-    /// The report of a performance of `name` that ended (played out or stopped), as `orch
-    /// play` prints it, and as its `--json` prints it.
-    fn report(&self, name: &str, finished: &Finished) -> (String, serde_json::Value);
+/// An error and its causes, as `orch` prints them (`what: why: why`).
+pub fn words(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        s += &format!(": {c}");
+        cause = c.source();
+    }
+    s
 }
 
 /// What `orch serve` serves.
 pub struct Config {
-    /// How the robot plays (its configuration, the virtual robot's figures, compensation);
-    /// its tempo is the factor a play starts at until the page sets one.
+    /// The robot (robot.toml, or the thesis's).
+    pub robot: Robot,
+    /// How it plays (its configuration, the virtual robot's figures, compensation); its tempo
+    /// is the factor a play starts at until the page sets one.
     pub setup: Setup,
     /// The outputs: one robot each (the virtual robot alone when there is just `sim`).
     pub outs: Vec<OutSpec>,
+    /// Whether outputs were named (`--out`): then the report at the end says where each
+    /// robot played, as `orch play`'s does.
+    pub named: bool,
     /// The folder of songs to pick from (`.mid` and `.midi` files in it), if any.
     pub library: Option<PathBuf>,
     /// Who may come in (the address listened on, the token).
     pub access: Access,
-    /// Reads and analyses songs, and words reports.
-    pub analyst: Arc<dyn Analyst>,
 }
 
 /// Why the server could not run.

@@ -19,12 +19,15 @@ use std::time::{Duration, Instant};
 
 use orch_io::OutSpec;
 use orch_perform::{Control, Setup, Tempo};
-use orch_stage::session::{bar_start, last_bar, open_lanes, Refused, Session, Snapshot};
+use orch_robot::Robot;
+use orch_stage::bars::{last_bar, start_of};
+use orch_stage::session::{open_lanes, Session, Snapshot};
+use orch_stage::StageError;
 use serde::Deserialize;
 use serde_json::{json, Value};
 use tokio::sync::{broadcast, watch};
 
-use crate::{Analysis, Analyst, Config};
+use crate::{Analysis, Config};
 
 /// Songs kept loaded: the oldest not playing or queued is forgotten past this.
 pub const KEPT_SONGS: usize = 16;
@@ -122,9 +125,12 @@ impl std::fmt::Display for Reject {
 
 impl std::error::Error for Reject {}
 
-impl From<Refused> for Reject {
-    fn from(r: Refused) -> Self {
-        Reject::Bad(r.to_string())
+/// A bar the song lacks, or a tempo out of range, said as the page's command asked it.
+fn refused(e: StageError) -> Reject {
+    match e {
+        StageError::NoSuchBar { bar, .. } => Reject::Bad(format!("bar {bar}: {e}")),
+        StageError::Tempo(t) => Reject::Bad(format!("tempo {t}: {e}")),
+        e => Reject::Bad(crate::words(&e)),
     }
 }
 
@@ -174,11 +180,12 @@ struct Inner {
 
 /// The server's player. See the [module notes](self).
 pub struct Player {
+    robot: Robot,
     setup: Setup,
     outs: Vec<OutSpec>,
+    named: bool,
     library: Option<PathBuf>,
     access: crate::Access,
-    analyst: Arc<dyn Analyst>,
     inner: Mutex<Inner>,
     states: broadcast::Sender<Arc<str>>,
     closing: watch::Sender<bool>,
@@ -189,11 +196,12 @@ impl Player {
     pub fn new(config: Config) -> Arc<Self> {
         let tempo = config.setup.tempo.get();
         Arc::new(Self {
+            robot: config.robot,
             setup: config.setup,
             outs: config.outs,
+            named: config.named,
             library: config.library,
             access: config.access,
-            analyst: config.analyst,
             inner: Mutex::new(Inner {
                 songs: Vec::new(),
                 next_id: 1,
@@ -247,7 +255,8 @@ impl Player {
     /// Reads and analyses an uploaded song (on this thread: it takes a while for a long one).
     pub fn load(&self, name: &str, bytes: &[u8]) -> Result<Arc<Loaded>, Reject> {
         let name = clean_name(name);
-        let analysis = self.analyst.analyze(&name, bytes).map_err(Reject::Bad)?;
+        let analysis =
+            crate::analyze(&self.robot, &self.setup, &name, bytes).map_err(Reject::Bad)?;
         let mut inner = self.lock();
         let id = inner.next_id;
         inner.next_id += 1;
@@ -375,12 +384,10 @@ impl Player {
                 }
             }
             Command::Tempo { factor } => {
-                let tempo = Tempo::new(factor)
-                    .filter(|t| (0.05..=20.0).contains(&t.get()))
-                    .ok_or(Refused::Tempo(factor))?;
+                let tempo = orch_stage::setup::tempo(factor).map_err(refused)?;
                 self.lock().tempo = tempo.get();
                 if let Ok(s) = session() {
-                    s.set_tempo(factor)?;
+                    s.set_tempo(factor).map_err(refused)?;
                     self.wait_live(|s| s.is_some_and(|s| s.tempo == factor));
                 }
             }
@@ -390,7 +397,7 @@ impl Player {
             }
             Command::Jump { bar } => {
                 let s = session()?;
-                s.jump_to_bar(bar)?;
+                s.jump_to_bar(bar).map_err(refused)?;
                 if !s.control().paused() {
                     self.wait_live(|s| s.is_some_and(|s| s.bar == bar));
                 }
@@ -426,12 +433,7 @@ impl Player {
         let song = find(&inner, id)?;
         let from = match bar {
             None => None,
-            Some(bar) => Some(
-                bar_start(&song.analysis.song, bar).ok_or(Refused::NoSuchBar {
-                    bar,
-                    last: last_bar(&song.analysis.song),
-                })?,
-            ),
+            Some(bar) => Some(start_of(&song.analysis.song, bar).map_err(refused)?),
         };
         let setup = Setup {
             tempo: Tempo::new(inner.tempo).unwrap_or(Tempo::NORMAL),
@@ -516,16 +518,14 @@ impl Player {
             }
         };
         let finished = session.finish();
-        let (text, report) = self.analyst.report(&song.name, &finished);
-        let the_song = &song.analysis.song;
+        // The report as `orch play` prints it, and as its --json does.
+        let reports = orch_stage::Reports::of(&finished.ended, self.named);
+        let text = orch_stage::text::reports(&reports, Path::new(&song.name));
+        let report = serde_json::to_value(&reports).unwrap_or(Value::Null);
+        let tempo = Tempo::new(tempo).unwrap_or(Tempo::NORMAL);
         let (account, start_ms) = finished.ended.first().map_or((Value::Null, 0.0), |e| {
-            let lines = e
-                .played
-                .account(|t_ms| the_song.bar_beat((t_ms * 1000.0 * tempo).round().max(0.0) as u64));
-            (
-                serde_json::to_value(lines).unwrap_or(Value::Null),
-                e.played.start_us as f64 / 1e3,
-            )
+            let lines = orch_stage::account::account(&song.analysis.song, &e.played, tempo, None);
+            (Value::Array(lines), e.played.start_us as f64 / 1e3)
         });
         let failure = finished
             .failed

@@ -4,7 +4,15 @@
 //! (`orch play`, `orch conduct`, `orch run`), and later a daemon or a web page. The front end
 //! parses its arguments and draws; the session's parts live here.
 //!
-//! So far:
+//! A song and a robot:
+//!
+//! - [`load`]: a Standard MIDI File read and checked ([`load_song`]: its first bytes before
+//!   the rest, its size capped) and the robot ([`load_robot`]: robot.toml, or the thesis's).
+//! - [`setup`]: how a robot plays (the performance's `Setup`), the tempo factors allowed,
+//!   and a performance on the virtual clock, as fast as the machine goes.
+//! - [`bars`]: bars as people count them, and where each begins (for a jump there).
+//!
+//! Playing it, live or on the virtual clock:
 //!
 //! - [`sources`]: the conductor's tempo sources (a baton video or camera, tap tempo, MIDI
 //!   clock from a byte stream or UDP, OSC over UDP), parsed from a `--source` text
@@ -24,8 +32,18 @@
 //!   a [`session::Snapshot`] of where it stands for any front end, every robot's report and
 //!   note-by-note account at the end.
 //!
-//! Errors are [`SourceError`] (a tempo source: bad input, named, or the I/O failure behind
-//! it) and [`LiveError`] (the live loop).
+//! What it leaves:
+//!
+//! - [`report`]: every robot's report ([`Reports`], JSON through serde), and [`text`]: the
+//!   reports as people read them, exactly as `orch play` prints them.
+//! - [`analysis`]: whether a robot can play a song and what will go wrong, without playing
+//!   it live ([`analyze`] gives an [`Analysis`]: the report, the notes that will go wrong,
+//!   the [`findings`] in words; the piano roll as SVG).
+//! - [`account`]: the note-by-note account and the board writes, a JSON line each.
+//!
+//! Errors ([`error`]) are [`StageError`] (a song, a bar, a tempo, a performance),
+//! [`SourceError`] (a tempo source: bad input, named, or the I/O failure behind it) and
+//! [`LiveError`] (the live loop); each says whether the user's input is at fault.
 //!
 //! ## Cargo features
 //!
@@ -33,89 +51,29 @@
 //!   own `camera` feature (building it needs libclang). Without it a camera source is refused,
 //!   saying how to build with it.
 
+pub mod account;
+pub mod analysis;
+pub mod bars;
+pub mod bytes;
+pub mod error;
+pub mod findings;
 pub mod framer;
+pub mod hex;
+pub mod interpret;
 pub mod live;
+pub mod load;
+pub mod messages;
+pub mod report;
+pub mod run;
 pub mod session;
+pub mod setup;
 pub mod sources;
+pub mod text;
 pub mod thru;
+pub mod writes;
 
+pub use analysis::{analyze, Analysis, Wrong};
+pub use error::{LiveError, SourceError, StageError};
 pub use live::{BoardWrite, LiveBoards, LiveRobot, ReloadRefused, Totals};
-
-/// Why a live session's part could not start.
-#[derive(Debug)]
-pub enum SourceError {
-    /// Bad input from the user: a source that cannot be opened or read, said in words (the
-    /// front end's bad-input exit).
-    BadInput(String),
-    /// An I/O failure while opening it.
-    Io {
-        /// What was being done.
-        what: String,
-        /// The failure.
-        source: std::io::Error,
-    },
-}
-
-impl std::fmt::Display for SourceError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            SourceError::BadInput(m) => f.write_str(m),
-            SourceError::Io { what, .. } => f.write_str(what),
-        }
-    }
-}
-
-impl std::error::Error for SourceError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            SourceError::Io { source, .. } => Some(source),
-            SourceError::BadInput(_) => None,
-        }
-    }
-}
-
-/// What stops a live robot, or keeps it from starting.
-#[derive(Debug)]
-pub enum LiveError {
-    /// Bad input from the user, said in words (the front end's bad-input exit): an output
-    /// that cannot be used this way.
-    BadInput(String),
-    /// The robot's configuration cannot run.
-    Robot(orch_robot::RobotError),
-    /// An output could not be opened.
-    Output(orch_io::OutError),
-    /// Something failed while running: a board write, a thru output.
-    Failed(String),
-}
-
-impl std::fmt::Display for LiveError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            LiveError::BadInput(m) | LiveError::Failed(m) => f.write_str(m),
-            LiveError::Robot(e) => write!(f, "{e}"),
-            LiveError::Output(e) => write!(f, "{e}"),
-        }
-    }
-}
-
-impl std::error::Error for LiveError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            LiveError::Robot(e) => Some(e),
-            LiveError::Output(e) => Some(e),
-            _ => None,
-        }
-    }
-}
-
-impl From<orch_robot::RobotError> for LiveError {
-    fn from(e: orch_robot::RobotError) -> Self {
-        LiveError::Robot(e)
-    }
-}
-
-impl From<orch_io::OutError> for LiveError {
-    fn from(e: orch_io::OutError) -> Self {
-        LiveError::Output(e)
-    }
-}
+pub use load::{load_robot, load_song};
+pub use report::{LinkFigures, Reports, RobotReport};

@@ -11,14 +11,13 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use orch_io::{Channels, OutSpec, OutStats, Output};
-use orch_perform::follow::FACTOR_RANGE;
 use orch_perform::{
     perform, realtime, song_events, Control, Cue, Follow, Follower, Link, Live, PerformError,
     Played, ScoreBeats, ScoreEvent, Setup, TapTempo, Tempo, Timed,
 };
 use orch_seq::Song;
 
-use crate::LiveError;
+use crate::{LiveError, StageError};
 
 /// One robot of a session: where it plays and how it is set up.
 pub struct Lane {
@@ -227,50 +226,6 @@ impl std::fmt::Display for SessionFailure {
     }
 }
 
-/// The song's last bar (the bar of its last instant).
-pub fn last_bar(song: &Song) -> u32 {
-    song.bar_beat(song.duration_us().saturating_sub(1)).0
-}
-
-/// Where bar `bar` begins (µs of score time), if the song has it: from 1 to [`last_bar`].
-pub fn bar_start(song: &Song, bar: u32) -> Option<u64> {
-    (1..=last_bar(song))
-        .contains(&bar)
-        .then(|| song.bar_start_us(bar))
-        .flatten()
-}
-
-/// A command a session refused, said in words (nothing was changed).
-#[derive(Clone, Debug, PartialEq)]
-pub enum Refused {
-    /// A jump to a bar the song does not have.
-    NoSuchBar {
-        /// The bar asked.
-        bar: u32,
-        /// The song's last bar.
-        last: u32,
-    },
-    /// A tempo factor out of range (or not a number).
-    Tempo(f64),
-}
-
-impl std::fmt::Display for Refused {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Refused::NoSuchBar { bar, last } => {
-                write!(f, "bar {bar}: the song has bars 1 to {last}")
-            }
-            Refused::Tempo(t) => write!(
-                f,
-                "tempo factor {t}: give a factor from {} to {}, such as 0.5 or 1.25",
-                FACTOR_RANGE.0, FACTOR_RANGE.1
-            ),
-        }
-    }
-}
-
-impl std::error::Error for Refused {}
-
 /// Tap tempo on a session: each tap a beat, the follower's rate taken as the tempo.
 struct Taps {
     tap: TapTempo,
@@ -398,22 +353,16 @@ impl Session {
 
     /// Jump to the start of bar `bar` (see [`Control::jump_to`]); a bar the song does not
     /// have is refused and changes nothing. Returns the target, µs of score time.
-    pub fn jump_to_bar(&self, bar: u32) -> Result<u64, Refused> {
-        let song = &self.watch.song;
-        let t = bar_start(song, bar).ok_or(Refused::NoSuchBar {
-            bar,
-            last: last_bar(song),
-        })?;
+    pub fn jump_to_bar(&self, bar: u32) -> Result<u64, StageError> {
+        let t = crate::bars::start_of(&self.watch.song, bar)?;
         self.control.jump_to(t);
         Ok(t)
     }
 
-    /// Play at tempo factor `factor` (1.0: as written) from now on; a factor out of range
-    /// (a twentieth to twenty) is refused and changes nothing.
-    pub fn set_tempo(&self, factor: f64) -> Result<Tempo, Refused> {
-        let tempo = Tempo::new(factor)
-            .filter(|t| (FACTOR_RANGE.0..=FACTOR_RANGE.1).contains(&t.get()))
-            .ok_or(Refused::Tempo(factor))?;
+    /// Play at tempo factor `factor` (1.0: as written) from now on; a factor out of
+    /// [`TEMPO_RANGE`](crate::setup::TEMPO_RANGE) is refused and changes nothing.
+    pub fn set_tempo(&self, factor: f64) -> Result<Tempo, StageError> {
+        let tempo = crate::setup::tempo(factor)?;
         self.control.set_tempo(tempo);
         Ok(tempo)
     }

@@ -9,7 +9,8 @@ use orch_io::OutSpec;
 use orch_perform::{Control, Link, Setup, Tempo};
 use orch_robot::Robot;
 use orch_seq::Song;
-use orch_stage::session::{open_lanes, Refused, Session};
+use orch_stage::session::{open_lanes, Session};
+use orch_stage::StageError;
 
 #[path = "../../../tests/support/smf.rs"]
 mod smf;
@@ -226,15 +227,15 @@ fn a_jump_to_a_bar_lands_there_and_a_bar_the_song_lacks_is_refused_changing_noth
         Instant::now(),
     );
     wait_for(&session, |s| s.notes_sent > 0);
-    assert_eq!(
+    assert!(matches!(
         session.jump_to_bar(7),
-        Err(Refused::NoSuchBar { bar: 7, last: 6 })
-    );
+        Err(StageError::NoSuchBar { bar: 7, last: 6 })
+    ));
     assert_eq!(
         session.jump_to_bar(0).unwrap_err().to_string(),
-        "bar 0: the song has bars 1 to 6"
+        "the song has bars 1 to 6"
     );
-    assert_eq!(session.jump_to_bar(5), Ok(8_000_000));
+    assert_eq!(session.jump_to_bar(5).unwrap(), 8_000_000);
     let s = wait_for(&session, |s| s.bar >= 5);
     assert_eq!(s.bar, 5, "landed at the start of bar 5: {s:?}");
     assert_eq!(s.beat, 1);
@@ -259,10 +260,16 @@ fn taps_a_quarter_of_a_second_apart_set_twice_the_written_tempo_and_a_bad_factor
         origin,
     );
     wait_for(&session, |s| s.notes_sent > 0);
-    assert_eq!(session.set_tempo(0.0), Err(Refused::Tempo(0.0)));
-    assert_eq!(session.set_tempo(21.0), Err(Refused::Tempo(21.0)));
+    assert!(matches!(
+        session.set_tempo(0.0),
+        Err(StageError::Tempo(0.0))
+    ));
+    assert!(matches!(
+        session.set_tempo(21.0),
+        Err(StageError::Tempo(21.0))
+    ));
     assert!(session.set_tempo(f64::NAN).is_err());
-    assert_eq!(session.set_tempo(0.5).map(|t| t.get()), Ok(0.5));
+    assert_eq!(session.set_tempo(0.5).unwrap().get(), 0.5);
     wait_for(&session, |s| s.tempo == 0.5);
     // Four taps 250 ms apart (240 BPM) on a song written at 120 BPM, the last one now (a
     // second or more into the performance).

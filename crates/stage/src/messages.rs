@@ -1,15 +1,68 @@
-//! How messages and counters are shown: text in the manner of `aseqdump`, or JSON lines with
-//! mido's message names and fields (channels 0-based).
+//! MIDI messages as people and scripts read them (`orch decode`): the decoder with the
+//! System Exclusive payloads it keeps ([`Messages`]), and each message as text in the manner
+//! of `aseqdump` or as a JSON line with mido's message names and fields (channels 0-based),
+//! then the counters.
 
 use std::io::{self, Write};
 
-use orch_core::{Counters, Message};
+use orch_core::{Counters, Decoder, Message};
 use serde_json::{json, Value};
+
+/// How much of a System Exclusive message's payload is kept and shown: the first 1 MiB. A
+/// longer one is shown with its first 1 MiB and its full length (text: "... (N more not
+/// shown)"; JSON: a `"length"` beside `"data"`), so memory stays bounded however long it is.
+pub const SYSEX_SHOWN: usize = 1 << 20;
+
+/// A decoder that keeps the start of each System Exclusive payload ([`SYSEX_SHOWN`] bytes) to
+/// show it.
+#[derive(Debug, Default)]
+pub struct Messages {
+    decoder: Decoder<0>,
+    /// The payload of the System Exclusive message being received (the decoder keeps none).
+    sysex: Vec<u8>,
+}
+
+impl Messages {
+    /// A decoder at the start of a stream.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Decodes `byte`, calling `each` with every message it ends (a System Exclusive message
+    /// with its payload's start), and stops at `each`'s first error.
+    pub fn push<E>(
+        &mut self,
+        byte: u8,
+        mut each: impl FnMut(Shown<'_>) -> Result<(), E>,
+    ) -> Result<(), E> {
+        if self.decoder.in_sysex() && byte < 0x80 && self.sysex.len() < SYSEX_SHOWN {
+            self.sysex.push(byte);
+        }
+        for message in self.decoder.push(byte) {
+            if message == Message::SysExStart {
+                self.sysex.clear();
+            }
+            each(Shown {
+                message,
+                sysex: &self.sysex,
+            })?;
+        }
+        Ok(())
+    }
+
+    /// The end of the stream: the counters, and whether the end cut a message off.
+    pub fn finish(&mut self) -> (Counters, bool) {
+        let truncated = self.decoder.finish();
+        (self.decoder.counters(), truncated)
+    }
+}
 
 /// A message with the System Exclusive payload the caller collected: all of it, or its start
 /// (a [`Message::SysEx`] says the full length).
 pub struct Shown<'a> {
+    /// The message.
     pub message: Message,
+    /// The start of its System Exclusive payload (a [`Message::SysEx`]'s).
     pub sysex: &'a [u8],
 }
 

@@ -3,7 +3,20 @@
 //! [`HexReader`] reads the text as it arrives, in chunks of any size, and keeps no line in
 //! memory: a gigabyte of hex digits with no newline is read in constant memory.
 
-use crate::error::bad_input;
+use std::fmt;
+
+/// Hex text that cannot be read: where, and why, in words ("line 3: 'G' in \"7G\" is not a
+/// hex digit").
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct HexError(String);
+
+impl fmt::Display for HexError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for HexError {}
 
 /// How many characters of a token an error message shows.
 const SHOWN: usize = 24;
@@ -72,7 +85,7 @@ impl HexReader {
     }
 
     /// Reads the next chunk of text, appending its bytes to `out`.
-    pub fn push(&mut self, text: &[u8], out: &mut Vec<u8>) -> anyhow::Result<()> {
+    pub fn push(&mut self, text: &[u8], out: &mut Vec<u8>) -> Result<(), HexError> {
         for &b in text {
             if self.utf8_need > 0 {
                 self.utf8_byte(b, out)?;
@@ -93,21 +106,21 @@ impl HexReader {
     }
 
     /// The end of the text: the last token ends.
-    pub fn finish(&mut self) -> anyhow::Result<()> {
+    pub fn finish(&mut self) -> Result<(), HexError> {
         if self.utf8_need > 0 {
             return Err(self.not_utf8(self.utf8[0]));
         }
         self.end_token()
     }
 
-    fn not_utf8(&self, b: u8) -> anyhow::Error {
-        bad_input(format!(
+    fn not_utf8(&self, b: u8) -> HexError {
+        HexError(format!(
             "line {}: byte {b:#04x} is not UTF-8 text; write hex digits",
             self.line
         ))
     }
 
-    fn utf8_byte(&mut self, b: u8, out: &mut Vec<u8>) -> anyhow::Result<()> {
+    fn utf8_byte(&mut self, b: u8, out: &mut Vec<u8>) -> Result<(), HexError> {
         if !(0x80..=0xBF).contains(&b) {
             return Err(self.not_utf8(self.utf8[0]));
         }
@@ -127,7 +140,7 @@ impl HexReader {
         self.char(c, out)
     }
 
-    fn char(&mut self, c: char, out: &mut Vec<u8>) -> anyhow::Result<()> {
+    fn char(&mut self, c: char, out: &mut Vec<u8>) -> Result<(), HexError> {
         if self.comment {
             if c == '\n' {
                 self.comment = false;
@@ -149,7 +162,7 @@ impl HexReader {
         Ok(())
     }
 
-    fn token_char(&mut self, c: char, out: &mut Vec<u8>) -> anyhow::Result<()> {
+    fn token_char(&mut self, c: char, out: &mut Vec<u8>) -> Result<(), HexError> {
         let t = self.token.get_or_insert_with(Token::default);
         t.chars += 1;
         if t.chars as usize <= SHOWN {
@@ -165,7 +178,7 @@ impl HexReader {
             if t.chars as usize > SHOWN {
                 token.push(c);
             }
-            return Err(bad_input(format!(
+            return Err(HexError(format!(
                 "line {}: {c:?} in {token:?} is not a hex digit",
                 self.line
             )));
@@ -177,12 +190,12 @@ impl HexReader {
         Ok(())
     }
 
-    fn end_token(&mut self) -> anyhow::Result<()> {
+    fn end_token(&mut self) -> Result<(), HexError> {
         let Some(t) = self.token.take() else {
             return Ok(());
         };
         if t.high.is_some() {
-            return Err(bad_input(format!(
+            return Err(HexError(format!(
                 "line {}: {:?} has an odd number of hex digits; write each byte as two digits",
                 self.line,
                 t.shown()
@@ -197,7 +210,7 @@ impl HexReader {
 /// Tokens are separated by whitespace or commas and may carry a `0x` prefix; each token holds
 /// whole pairs of digits. `#` starts a comment running to the end of the line. The same rules
 /// as [`HexReader`], which it uses.
-pub fn parse_line(line: &str, line_no: usize, out: &mut Vec<u8>) -> anyhow::Result<()> {
+pub fn parse_line(line: &str, line_no: usize, out: &mut Vec<u8>) -> Result<(), HexError> {
     let mut reader = HexReader::at_line(line_no);
     reader.push(line.as_bytes(), out)?;
     reader.finish()
@@ -207,7 +220,7 @@ pub fn parse_line(line: &str, line_no: usize, out: &mut Vec<u8>) -> anyhow::Resu
 mod tests {
     use super::*;
 
-    fn parse(text: &str) -> anyhow::Result<Vec<u8>> {
+    fn parse(text: &str) -> Result<Vec<u8>, HexError> {
         let mut out = Vec::new();
         for (i, line) in text.lines().enumerate() {
             parse_line(line, i + 1, &mut out)?;
@@ -216,7 +229,7 @@ mod tests {
     }
 
     /// The whole text through one reader, in chunks of `size` bytes.
-    fn stream(text: &[u8], size: usize) -> (Vec<u8>, anyhow::Result<()>) {
+    fn stream(text: &[u8], size: usize) -> (Vec<u8>, Result<(), HexError>) {
         let mut reader = HexReader::new();
         let mut out = Vec::new();
         for chunk in text.chunks(size.max(1)) {
