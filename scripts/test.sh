@@ -14,8 +14,9 @@ step "install: Debian packages, the firmware's nightly (firmware/install.sh), ru
 # feature (tested below with --all-features) links. libclang-dev: the `camera` feature's v4l
 # crate generates its kernel bindings with libclang at build time. timgm6mb-soundfont: the
 # General MIDI soundfont `orch render`'s tests play through (6 MB, GPL-2; never committed here:
-# installed in /usr/share/sounds/sf2).
-bash firmware/install.sh tmux libasound2-dev libclang-dev timgm6mb-soundfont
+# installed in /usr/share/sounds/sf2). chromium and chromium-driver: `orch serve`'s browser tests
+# (tests/serve_browser.rs) drive headless Chromium through chromedriver.
+bash firmware/install.sh tmux libasound2-dev libclang-dev timgm6mb-soundfont chromium chromium-driver
 if [ ! -e /dev/snd/seq ]; then
     echo "NOTE: this kernel offers no ALSA sequencer (/dev/snd/seq): the alsa output's real-port test skips (its encoder test runs)"
 fi
