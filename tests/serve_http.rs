@@ -293,3 +293,91 @@ fn a_malformed_file_gets_orch_plays_message_and_changes_nothing() {
         "the refused files were not loaded"
     );
 }
+
+#[test]
+fn each_command_is_acknowledged_with_the_state_that_shows_it_and_the_queue_plays_on() {
+    let s = Served::start(&["--listen", "127.0.0.1:0"]);
+    let octets = ["Content-Type: application/octet-stream"];
+    let upload = |name: &str, smf: Vec<u8>| -> u64 {
+        let (status, body) = s.request("POST", &format!("/api/songs?name={name}"), &octets, &smf);
+        assert_eq!(status, 200, "{body}");
+        serde_json::from_str::<serde_json::Value>(&body).unwrap()["id"]
+            .as_u64()
+            .unwrap()
+    };
+    // 64 quarters at 120 BPM: 16 bars, 32 s; and a short one for the queue.
+    let long = upload("long.mid", support::quarters_smf(64, 120.0));
+    let short = upload("short.mid", support::quarters_smf(4, 480.0));
+    let (status, body) = s.command(r#"{"cmd":"play","song":99}"#);
+    assert_eq!(
+        (status, body["error"].as_str()),
+        (404, Some("no song 99 is loaded"))
+    );
+    let (status, body) = s.command(&format!(r#"{{"cmd":"play","song":{long},"bar":17}}"#));
+    assert_eq!(
+        (status, body["error"].as_str()),
+        (400, Some("bar 17: the song has bars 1 to 16"))
+    );
+    let (status, body) = s.command(&format!(r#"{{"cmd":"play","song":{long}}}"#));
+    assert_eq!(status, 200, "{body}");
+    assert_eq!(body["state"]["playing"]["name"], "long.mid");
+    assert_eq!(body["state"]["playing"]["bar"], 1, "{body}");
+    let (status, body) = s.command(&format!(r#"{{"cmd":"play","song":{short}}}"#));
+    assert_eq!(status, 409, "{body}");
+    let (status, body) = s.command(&format!(r#"{{"cmd":"queue","song":{short}}}"#));
+    assert_eq!(status, 200);
+    assert_eq!(body["state"]["queue"][0]["name"], "short.mid");
+    let (_, body) = s.command(r#"{"cmd":"pause"}"#);
+    assert_eq!(body["state"]["playing"]["paused"], true, "{body}");
+    let (_, body) = s.command(r#"{"cmd":"resume"}"#);
+    assert_eq!(body["state"]["playing"]["paused"], false, "{body}");
+    let (status, body) = s.command(r#"{"cmd":"tempo","factor":25}"#);
+    assert_eq!(status, 400, "{body}");
+    assert!(
+        body["error"]
+            .as_str()
+            .unwrap()
+            .starts_with("tempo 25: give a factor from 0.05 to 20"),
+        "{body}"
+    );
+    let (_, body) = s.command(r#"{"cmd":"tempo","factor":1.5}"#);
+    assert_eq!(body["state"]["playing"]["tempo"], 1.5, "{body}");
+    assert_eq!(body["state"]["tempo"], 1.5);
+    let (status, body) = s.command(r#"{"cmd":"jump","bar":40}"#);
+    assert_eq!(
+        (status, body["error"].as_str()),
+        (400, Some("bar 40: the song has bars 1 to 16"))
+    );
+    let (_, body) = s.command(r#"{"cmd":"jump","bar":15}"#);
+    assert_eq!(body["state"]["playing"]["bar"], 15, "{body}");
+    let (status, _) = s.command(r#"{"cmd":"tap"}"#);
+    assert_eq!(status, 200);
+    // Played out (bars 15 and 16 at 1.5 times: under 3 s), the queue's song follows, then
+    // its report.
+    let state = s.wait_state(60, |st| st["ended"]["name"] == "short.mid");
+    assert_eq!(state["queue"], serde_json::json!([]));
+    assert_eq!(state["ended"]["stopped"], false);
+    assert!(state["ended"]["text"]
+        .as_str()
+        .unwrap()
+        .starts_with("short.mid\n"));
+    // STOP: the queue is emptied with it, and the acknowledgement is the end, every key up.
+    s.command(&format!(r#"{{"cmd":"play","song":{long}}}"#));
+    s.command(&format!(r#"{{"cmd":"queue","song":{short}}}"#));
+    s.command(&format!(r#"{{"cmd":"queue","song":{short}}}"#));
+    let (status, body) = s.command(r#"{"cmd":"unqueue","index":5}"#);
+    assert_eq!(status, 404, "{body}");
+    let (_, body) = s.command(r#"{"cmd":"unqueue","index":0}"#);
+    assert_eq!(body["state"]["queue"].as_array().unwrap().len(), 1);
+    let (_, body) = s.command(r#"{"cmd":"stop"}"#);
+    let state = &body["state"];
+    assert_eq!(state["playing"], serde_json::Value::Null, "{state}");
+    assert_eq!(state["queue"], serde_json::json!([]));
+    assert_eq!(state["ended"]["name"], "long.mid");
+    assert_eq!(state["ended"]["stopped"], true);
+    let (status, body) = s.command(r#"{"cmd":"stop"}"#);
+    assert_eq!(
+        (status, body["error"].as_str()),
+        (409, Some("nothing is playing"))
+    );
+}
