@@ -130,6 +130,20 @@ async fn testid(c: &Client, id: &str) -> fantoccini::elements::Element {
         .unwrap_or_else(|e| panic!("[data-testid={id}]: {e}"))
 }
 
+/// Clicks `[data-testid=id]` as a person would: scrolled to the middle of the screen first
+/// (WebDriver would scroll it to the top edge, under the page's fixed bar).
+async fn click(c: &Client, id: &str) {
+    c.execute(
+        &format!(
+            "document.querySelector('[data-testid=\"{id}\"]').scrollIntoView({{block: 'center'}});"
+        ),
+        vec![],
+    )
+    .await
+    .unwrap();
+    testid(c, id).await.click().await.unwrap();
+}
+
 /// The page loaded, its WebSocket's first state drawn (the keys are there).
 async fn open(c: &Client, s: &Served) {
     c.goto(&s.url).await.unwrap();
@@ -547,6 +561,111 @@ fn stop_releases_every_key_at_once_on_the_page_and_on_a_udp_output() {
         }
         let report = testid(&c, "report").await.text().await.unwrap();
         assert!(report.contains(&format!("robot 2: {out}")), "{report}");
+        c.close().await.unwrap();
+    });
+}
+
+#[test]
+fn the_controls_play_from_a_bar_on_the_roll_pause_set_the_tempo_and_jump() {
+    let s = Served::start(&["--listen", "127.0.0.1:0"]);
+    let driver = Driver::start();
+    // 64 quarters at 120 BPM: 16 bars of 4/4, 32 s.
+    let file = scratch("long.mid", &support::quarters_smf(64, 120.0));
+    runtime().block_on(async {
+        let c = driver.browser(390, 844).await;
+        open(&c, &s).await;
+        testid(&c, "upload")
+            .await
+            .send_keys(file.to_str().unwrap())
+            .await
+            .unwrap();
+        wait_for(
+            &c,
+            "the roll",
+            "return document.querySelector('[data-testid=\"roll\"] g.bar[data-bar=\"5\"]') !== null;",
+        )
+        .await;
+        // A click on bar 5's number in the roll plays from there.
+        c.execute(
+            "document.querySelector('[data-testid=\"roll\"] g.bar[data-bar=\"5\"] text')\
+             .scrollIntoView({block: 'center'});",
+            vec![],
+        )
+        .await
+        .unwrap();
+        c.find(Locator::Css("[data-testid=\"roll\"] g.bar[data-bar=\"5\"] text"))
+            .await
+            .unwrap()
+            .click()
+            .await
+            .unwrap();
+        let bar_is = |bar: u32| {
+            format!(
+                "const t = document.querySelector('[data-testid=\"bar-beat\"]').textContent; \
+                 return t.startsWith('{bar}:') && t;"
+            )
+        };
+        wait_for(&c, "playing from bar 5", &bar_is(5)).await;
+        click(&c, "pause").await;
+        wait_for(
+            &c,
+            "paused",
+            "return document.querySelector('[data-testid=\"status\"]').textContent\
+             .startsWith('paused') && !document.querySelector('[data-testid=\"resume\"]').disabled;",
+        )
+        .await;
+        let tempo = testid(&c, "tempo").await;
+        tempo.clear().await.unwrap();
+        tempo.send_keys("1.5\n").await.unwrap();
+        c.execute(
+            "document.querySelector('[data-testid=\"tempo\"]').dispatchEvent(new Event('change'));",
+            vec![],
+        )
+        .await
+        .unwrap();
+        // Taken while paused: the performance goes on at it once resumed.
+        let t0 = Instant::now();
+        while s.get_json("/api/state")["tempo"] != json!(1.5) {
+            assert!(t0.elapsed() < PATIENCE, "the tempo never came");
+            tokio::time::sleep(Duration::from_millis(25)).await;
+        }
+        let bar = testid(&c, "bar-input").await;
+        bar.send_keys("12\n").await.unwrap();
+        click(&c, "resume").await;
+        wait_for(&c, "jumped to bar 12", &bar_is(12)).await;
+        wait_for(
+            &c,
+            "tempo 1.5",
+            "return document.querySelector('[data-testid=\"bpm\"]').textContent\
+             .includes('×1.50');",
+        )
+        .await;
+        let state = s.get_json("/api/state");
+        assert_eq!(state["playing"]["paused"], json!(false), "{state}");
+        assert!((state["playing"]["bpm"].as_f64().unwrap() - 180.0).abs() < 0.01, "{state}");
+        // A bar the song lacks: said on the page, the performance goes on.
+        let bar = testid(&c, "bar-input").await;
+        bar.clear().await.unwrap();
+        bar.send_keys("99\n").await.unwrap();
+        let said = wait_for(
+            &c,
+            "the error",
+            "const e = document.querySelector('[data-testid=\"error\"]'); \
+             return !e.hidden && e.textContent;",
+        )
+        .await;
+        assert_eq!(said, json!("bar 99: the song has bars 1 to 16"));
+        assert!(s.get_json("/api/state")["playing"]["bar"].as_u64().unwrap() >= 12);
+        click(&c, "stop").await;
+        wait_for(
+            &c,
+            "stopped",
+            "return document.querySelector('[data-testid=\"status\"]').textContent\
+             .startsWith('stopped');",
+        )
+        .await;
+        let ended = s.get_json("/api/ended");
+        assert_eq!(ended["report"]["jumps"], json!(2), "{ended}");
         c.close().await.unwrap();
     });
 }
