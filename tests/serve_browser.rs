@@ -13,116 +13,21 @@
 //!
 //! Every wait is on a condition, with a generous limit (the machine may be loaded).
 
+#[path = "support/browser.rs"]
+mod browser;
 #[path = "support/serve.rs"]
 mod serve;
 mod support;
 
-use std::net::{TcpListener, TcpStream, UdpSocket};
+use std::net::UdpSocket;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::Command;
 use std::time::{Duration, Instant};
 
-use fantoccini::{Client, ClientBuilder, Locator};
+use browser::{runtime, wait_for, Driver, PATIENCE};
+use fantoccini::{Client, Locator};
 use serde_json::{json, Value};
 use serve::Served;
-
-/// How long any one condition may take to come true.
-const PATIENCE: Duration = Duration::from_secs(90);
-
-/// chromedriver on a free port of loopback, ended when dropped.
-struct Driver {
-    child: Child,
-    url: String,
-}
-
-impl Driver {
-    fn start() -> Driver {
-        let port = TcpListener::bind("127.0.0.1:0")
-            .unwrap()
-            .local_addr()
-            .unwrap()
-            .port();
-        let child = Command::new("chromedriver")
-            .arg(format!("--port={port}"))
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect(
-                "chromedriver runs (Debian's chromium and chromium-driver: scripts/test.sh \
-                 installs them)",
-            );
-        let t0 = Instant::now();
-        while TcpStream::connect(("127.0.0.1", port)).is_err() {
-            assert!(t0.elapsed() < PATIENCE, "chromedriver never listened");
-            std::thread::sleep(Duration::from_millis(50));
-        }
-        Driver {
-            child,
-            url: format!("http://127.0.0.1:{port}"),
-        }
-    }
-
-    /// A new headless Chromium, its window `width` × `height` CSS pixels.
-    async fn browser(&self, width: u32, height: u32) -> Client {
-        let mut options = json!({
-            "args": [
-                "--headless=new",
-                "--no-sandbox",
-                "--disable-gpu",
-                "--disable-dev-shm-usage",
-                "--hide-scrollbars",
-                format!("--window-size={width},{height}"),
-            ],
-        });
-        if width < 500 {
-            // A phone: Chromium's windows are at least 500 pixels wide, its emulated
-            // phones any width.
-            options["mobileEmulation"] = json!({
-                "deviceMetrics": { "width": width, "height": height, "pixelRatio": 1.0 },
-            });
-        }
-        if Path::new("/usr/bin/chromium").exists() {
-            options["binary"] = json!("/usr/bin/chromium");
-        }
-        let mut caps = serde_json::Map::new();
-        caps.insert("goog:chromeOptions".into(), options);
-        let connector = hyper_util::client::legacy::connect::HttpConnector::new();
-        ClientBuilder::new(connector)
-            .capabilities(caps)
-            .connect(&self.url)
-            .await
-            .expect("a Chromium session")
-    }
-}
-
-impl Drop for Driver {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-fn runtime() -> tokio::runtime::Runtime {
-    tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()
-        .unwrap()
-}
-
-/// Runs `script` (a function body that returns a value) until it returns something other
-/// than `null` or `false`, and gives that; panics naming `what` after [`PATIENCE`].
-async fn wait_for(c: &Client, what: &str, script: &str) -> Value {
-    let t0 = Instant::now();
-    loop {
-        let v = c.execute(script, vec![]).await.unwrap_or(Value::Null);
-        if !(v.is_null() || v == Value::Bool(false)) {
-            return v;
-        }
-        assert!(t0.elapsed() < PATIENCE, "{what}: never came");
-        tokio::time::sleep(Duration::from_millis(25)).await;
-    }
-}
 
 async fn testid(c: &Client, id: &str) -> fantoccini::elements::Element {
     c.find(Locator::Css(&format!("[data-testid=\"{id}\"]")))

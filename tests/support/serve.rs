@@ -57,6 +57,11 @@ impl Served {
         }
     }
 
+    /// The server's process id.
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
     /// A request with `headers` (each `Name: value`; `Host` is the server's unless given)
     /// and `body`: the status and the response's body.
     pub fn request(

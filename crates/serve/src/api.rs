@@ -212,7 +212,7 @@ async fn upload(
 
 async fn ended(State(p): State<Arc<Player>>) -> Response {
     match p.ended() {
-        Ok(e) => Json(e).into_response(),
+        Ok(e) => ([(header::CONTENT_TYPE, "application/json")], e).into_response(),
         Err(r) => rejected(r),
     }
 }

@@ -141,8 +141,9 @@ struct Ended {
     stopped: bool,
     text: String,
     json: Value,
-    /// The first robot's note-by-note account (as `orch play --notes` writes it).
-    account: Value,
+    /// The first robot's note-by-note account (as `orch play --notes` writes it), as JSON
+    /// text: a line a note of the score, kept compact (tens of thousands for a long piece).
+    account: Arc<str>,
     /// When the performance's clock began (ms since the Unix epoch).
     origin_ms: f64,
     /// When the song began on that clock (score time 0; the account's times count from
@@ -318,13 +319,14 @@ impl Player {
     /// note-by-note account (`account`, as `orch play --notes` writes it), when its clock
     /// began (`origin_ms`, ms since the Unix epoch) and when the song began on it
     /// (`start_ms`: the account's times count from there).
-    pub fn ended(&self) -> Result<Value, Reject> {
+    /// As JSON text.
+    pub fn ended(&self) -> Result<String, Reject> {
         let inner = self.lock();
         let e = inner
             .ended
             .as_ref()
             .ok_or_else(|| Reject::NotFound("no performance has ended yet".into()))?;
-        Ok(json!({
+        let head = json!({
             "song": e.song,
             "name": e.name,
             "stopped": e.stopped,
@@ -332,8 +334,11 @@ impl Player {
             "report": e.json,
             "origin_ms": e.origin_ms,
             "start_ms": e.start_ms,
-            "account": e.account,
-        }))
+        })
+        .to_string();
+        // The account, kept as text, goes in as it is.
+        let head = head.strip_suffix('}').unwrap_or(&head);
+        Ok(format!("{head},\"account\":{}}}", e.account))
     }
 
     /// A loaded song.
@@ -523,9 +528,10 @@ impl Player {
         let text = orch_stage::text::reports(&reports, Path::new(&song.name));
         let report = serde_json::to_value(&reports).unwrap_or(Value::Null);
         let tempo = Tempo::new(tempo).unwrap_or(Tempo::NORMAL);
-        let (account, start_ms) = finished.ended.first().map_or((Value::Null, 0.0), |e| {
+        let (account, start_ms) = finished.ended.first().map_or(("null".into(), 0.0), |e| {
             let lines = orch_stage::account::account(&song.analysis.song, &e.played, tempo, None);
-            (Value::Array(lines), e.played.start_us as f64 / 1e3)
+            let text = serde_json::to_string(&lines).unwrap_or_else(|_| "null".into());
+            (Arc::<str>::from(text), e.played.start_us as f64 / 1e3)
         });
         let failure = finished
             .failed

@@ -1,0 +1,112 @@
+//! Headless Chromium for `orch serve`'s browser tests and figures: chromedriver on a free
+//! port of loopback, browsers (a phone's window through mobile emulation), and waiting on a
+//! condition in the page. Debian's `chromium` and `chromium-driver` (scripts/test.sh installs
+//! them).
+
+#![allow(dead_code)]
+
+use std::net::{TcpListener, TcpStream};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use fantoccini::{Client, ClientBuilder};
+use serde_json::{json, Value};
+
+/// How long any one condition may take to come true.
+pub const PATIENCE: Duration = Duration::from_secs(90);
+
+/// chromedriver on a free port of loopback, ended when dropped.
+pub struct Driver {
+    child: Child,
+    url: String,
+}
+
+impl Driver {
+    pub fn start() -> Driver {
+        let port = TcpListener::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap()
+            .port();
+        let child = Command::new("chromedriver")
+            .arg(format!("--port={port}"))
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect(
+                "chromedriver runs (Debian's chromium and chromium-driver: scripts/test.sh \
+                 installs them)",
+            );
+        let t0 = Instant::now();
+        while TcpStream::connect(("127.0.0.1", port)).is_err() {
+            assert!(t0.elapsed() < PATIENCE, "chromedriver never listened");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        Driver {
+            child,
+            url: format!("http://127.0.0.1:{port}"),
+        }
+    }
+
+    /// A new headless Chromium, its window `width` × `height` CSS pixels.
+    pub async fn browser(&self, width: u32, height: u32) -> Client {
+        let mut options = json!({
+            "args": [
+                "--headless=new",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--disable-dev-shm-usage",
+                "--hide-scrollbars",
+                format!("--window-size={width},{height}"),
+            ],
+        });
+        if width < 500 {
+            // A phone: Chromium's windows are at least 500 pixels wide, its emulated
+            // phones any width.
+            options["mobileEmulation"] = json!({
+                "deviceMetrics": { "width": width, "height": height, "pixelRatio": 1.0 },
+            });
+        }
+        if Path::new("/usr/bin/chromium").exists() {
+            options["binary"] = json!("/usr/bin/chromium");
+        }
+        let mut caps = serde_json::Map::new();
+        caps.insert("goog:chromeOptions".into(), options);
+        let connector = hyper_util::client::legacy::connect::HttpConnector::new();
+        ClientBuilder::new(connector)
+            .capabilities(caps)
+            .connect(&self.url)
+            .await
+            .expect("a Chromium session")
+    }
+}
+
+impl Drop for Driver {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+pub fn runtime() -> tokio::runtime::Runtime {
+    tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .unwrap()
+}
+
+/// Runs `script` (a function body that returns a value) until it returns something other
+/// than `null` or `false`, and gives that; panics naming `what` after [`PATIENCE`].
+pub async fn wait_for(c: &Client, what: &str, script: &str) -> Value {
+    let t0 = Instant::now();
+    loop {
+        let v = c.execute(script, vec![]).await.unwrap_or(Value::Null);
+        if !(v.is_null() || v == Value::Bool(false)) {
+            return v;
+        }
+        assert!(t0.elapsed() < PATIENCE, "{what}: never came");
+        tokio::time::sleep(Duration::from_millis(25)).await;
+    }
+}
