@@ -381,3 +381,67 @@ fn each_command_is_acknowledged_with_the_state_that_shows_it_and_the_queue_plays
         (409, Some("nothing is playing"))
     );
 }
+
+#[test]
+fn sigterm_with_a_viewer_watching_a_chord_releases_every_key_and_ends_the_server() {
+    use std::io::{Read, Write};
+    let udp = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    udp.set_read_timeout(Some(std::time::Duration::from_millis(200)))
+        .unwrap();
+    let out = format!("udp:{}", udp.local_addr().unwrap());
+    let mut s = Served::start(&["--listen", "127.0.0.1:0", "--out", &out]);
+    // 4 notes at once, held 30 s.
+    let mut trk = vec![0x00, 0xFF, 0x51, 0x03, 0x07, 0xA1, 0x20];
+    for n in [60u8, 64, 67, 72] {
+        trk.extend_from_slice(&[0x00, 0x90, n, 100]);
+    }
+    trk.extend_from_slice(&[0x83, 0xE1, 0x00, 0x80, 60, 0, 0x00, 0xFF, 0x2F, 0x00]);
+    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
+    smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
+    smf.extend_from_slice(&trk);
+    let (status, body) = s.request(
+        "POST",
+        "/api/songs?name=chord.mid",
+        &["Content-Type: audio/midi"],
+        &smf,
+    );
+    assert_eq!(status, 200, "{body}");
+    let (status, body) = s.command(r#"{"cmd":"play","song":1}"#);
+    assert_eq!(status, 200, "{body}");
+    // A viewer on the WebSocket, as the page would be.
+    let mut ws = std::net::TcpStream::connect(s.addr).unwrap();
+    let mut head = format!("GET /api/ws HTTP/1.1\r\nHost: {}\r\n", s.host);
+    for h in WS_UPGRADE {
+        head += &format!("{h}\r\n");
+    }
+    ws.write_all(format!("{head}\r\n").as_bytes()).unwrap();
+    ws.set_read_timeout(Some(std::time::Duration::from_secs(30)))
+        .unwrap();
+    let mut got = [0u8; 12];
+    ws.read_exact(&mut got).unwrap();
+    assert_eq!(&got, b"HTTP/1.1 101");
+    let mut bytes = Vec::new();
+    let mut buf = [0u8; 256];
+    let t0 = std::time::Instant::now();
+    while bytes.iter().filter(|b| **b == 0x90).count() < 4 {
+        assert!(
+            t0.elapsed() < std::time::Duration::from_secs(60),
+            "no chord: {bytes:02x?}"
+        );
+        if let Ok(n) = udp.recv(&mut buf) {
+            bytes.extend_from_slice(&buf[..n]);
+        }
+    }
+    let status = s
+        .terminate(10)
+        .expect("orch serve ended on SIGTERM with a viewer connected");
+    assert!(status.success(), "{status:?}");
+    while let Ok(n) = udp.recv(&mut buf) {
+        bytes.extend_from_slice(&buf[..n]);
+    }
+    let all_off: Vec<u8> = (0..16u8).flat_map(|ch| [0xB0 | ch, 123, 0]).collect();
+    assert!(
+        bytes.ends_with(&all_off),
+        "no All Notes Off at the end: {bytes:02x?}"
+    );
+}

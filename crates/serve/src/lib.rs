@@ -151,14 +151,19 @@ pub async fn serve(
 ) -> Result<(), ServeError> {
     let players = player::Player::new(config);
     let router = api::router(Arc::clone(&players));
-    let result = axum::serve(
+    // On shutdown: every viewer let go (their WebSockets would keep the server waiting) and
+    // any performance stopped, every key released, before the last connections are waited
+    // for.
+    let p = Arc::clone(&players);
+    let shutdown = async move {
+        shutdown.await;
+        let _ = tokio::task::spawn_blocking(move || p.shut_down()).await;
+    };
+    axum::serve(
         listener,
         router.into_make_service_with_connect_info::<SocketAddr>(),
     )
     .with_graceful_shutdown(shutdown)
     .await
-    .map_err(ServeError::Io);
-    let p = Arc::clone(&players);
-    let _ = tokio::task::spawn_blocking(move || p.shut_down()).await;
-    result
+    .map_err(ServeError::Io)
 }

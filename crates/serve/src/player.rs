@@ -529,7 +529,12 @@ impl Player {
         let report = serde_json::to_value(&reports).unwrap_or(Value::Null);
         let tempo = Tempo::new(tempo).unwrap_or(Tempo::NORMAL);
         let (account, start_ms) = finished.ended.first().map_or(("null".into(), 0.0), |e| {
-            let lines = orch_stage::account::account(&song.analysis.song, &e.played, tempo, None);
+            // Serialised line by line (`orch_stage::account::account`'s lines, without a JSON
+            // tree of tens of thousands of objects on the way).
+            let the_song = &song.analysis.song;
+            let lines = e
+                .played
+                .account(|t_ms| the_song.bar_beat((t_ms * 1000.0 * tempo.get()).round() as u64));
             let text = serde_json::to_string(&lines).unwrap_or_else(|_| "null".into());
             (Arc::<str>::from(text), e.played.start_us as f64 / 1e3)
         });
