@@ -15,11 +15,11 @@ use orch_io::{OutSpec, Target};
 use orch_perform::{Control, Setup, Tempo};
 use orch_seq::Song;
 use orch_stage::session::{Ended, Lane, Session, SessionFailure, Snapshot};
-use orch_stage::{analyze, load_robot, load_song, text, Reports};
+use orch_stage::{analyze, bars, load_robot, load_song, text, Reports};
 
 use crate::cli::{AnalyzeArgs, PlayArgs};
 use crate::error::bad_input;
-use crate::view::{Scene, View};
+use crate::view::{Key, Scene, View};
 
 /// `--tempo`: the factor, if a session takes it.
 fn tempo(factor: f64) -> anyhow::Result<Tempo> {
@@ -103,45 +103,6 @@ pub(crate) fn from_bar(song: &Song, bar: Option<u32>) -> anyhow::Result<Option<u
     };
     let start = orch_stage::bars::start_of(song, bar).with_context(|| format!("--from {bar}"))?;
     Ok(Some(start))
-}
-
-/// The jump keys of the live view: digits and Enter jump to the bar typed (Backspace takes a
-/// digit back), `[` to the bar before the one playing, `]` to the next. Returns the jump's
-/// target, µs of score time, if a key asks for one (a bar the song does not have asks for
-/// nothing).
-pub(crate) fn jump_key(
-    key: crate::view::Key,
-    typed: &mut String,
-    bar_now: u32,
-    song: &Song,
-) -> Option<u64> {
-    use crate::view::Key;
-    match key {
-        Key::Char(c @ '0'..='9') if typed.len() < 6 => {
-            typed.push(c);
-            None
-        }
-        Key::Backspace => {
-            typed.pop();
-            None
-        }
-        Key::Enter => {
-            let bar = std::mem::take(typed).parse().ok()?;
-            orch_stage::bars::bar_start(song, bar)
-        }
-        Key::Char('[') => orch_stage::bars::bar_start(song, bar_now.saturating_sub(1).max(1)),
-        Key::Char(']') => orch_stage::bars::bar_start(song, bar_now.saturating_add(1)),
-        _ => None,
-    }
-}
-
-/// Whether a key is one of the live view's jump keys.
-pub(crate) fn is_jump_key(key: crate::view::Key) -> bool {
-    use crate::view::Key;
-    matches!(
-        key,
-        Key::Char('0'..='9' | '[' | ']') | Key::Enter | Key::Backspace
-    )
 }
 
 /// How a live performance is shown and steered.
@@ -243,21 +204,38 @@ pub(crate) fn play_live(
         let mut view = if show { Some(View::start()?) } else { None };
         let mut view_error = None;
         // The bar being typed, and the bar playing (for `[` and `]`).
-        let mut typed = String::new();
+        let mut typed = bars::Typed::default();
         let mut bar_now = 1;
         while !session.is_finished() {
             if signalled.load(Ordering::SeqCst) {
                 control.stop();
             }
             if let Some(v) = view.as_mut() {
-                let mut on_key = |key: crate::view::Key| {
-                    if is_jump_key(key) {
-                        if let Some(t) = jump_key(key, &mut typed, bar_now, session.song()) {
-                            control.jump_to(t);
+                // The jump keys: digits and Enter go to the bar typed (Backspace takes a digit
+                // back), `[` to the bar before the one playing, `]` to the next.
+                let mut on_key = |key: Key| {
+                    let song = session.song();
+                    let jump = match key {
+                        Key::Char(c @ '0'..='9') => {
+                            typed.digit(c);
+                            None
                         }
-                    } else if let (Some(c), crate::view::Key::Char(ch)) = (conductor.as_mut(), key)
-                    {
-                        (c.on_key)(ch);
+                        Key::Backspace => {
+                            typed.back();
+                            None
+                        }
+                        Key::Enter => typed.enter(song),
+                        Key::Char('[') => bars::before(song, bar_now),
+                        Key::Char(']') => bars::after(song, bar_now),
+                        Key::Char(c) => {
+                            if let Some(k) = conductor.as_mut() {
+                                (k.on_key)(c);
+                            }
+                            None
+                        }
+                    };
+                    if let Some(t) = jump {
+                        control.jump_to(t);
                     }
                 };
                 // Drawn every 20 ms; a key is taken as it comes.
@@ -268,7 +246,7 @@ pub(crate) fn play_live(
                     let mut scene = scene(snapshot, &title);
                     bar_now = scene.bar;
                     scene.command = command;
-                    scene.prompt = (!typed.is_empty()).then(|| typed.clone());
+                    scene.prompt = typed.shown().map(str::to_string);
                     if let Some(c) = &conductor {
                         scene.conductor = Some((c.status)());
                     }

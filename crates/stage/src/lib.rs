@@ -54,6 +54,7 @@ pub mod account;
 pub mod analysis;
 pub mod bars;
 pub mod bytes;
+pub mod conductor;
 pub mod error;
 pub mod findings;
 pub mod framer;
