@@ -15,6 +15,7 @@ use orch_io::{OutSpec, Target};
 use orch_perform::{Control, Setup, Tempo};
 use orch_seq::Song;
 use orch_stage::session::{Ended, Lane, Session, SessionFailure, Snapshot};
+use orch_stage::watch::{self, WatchError};
 use orch_stage::{analyze, bars, load_robot, load_song, text, Reports};
 
 use crate::cli::{AnalyzeArgs, PlayArgs};
@@ -193,104 +194,83 @@ pub(crate) fn play_live(
         Some(c) => (Arc::clone(&c.control), c.origin),
         None => (Control::new(), std::time::Instant::now()),
     };
-    if let Some(t) = from_us {
-        control.jump_to(t);
-    }
-    if lanes.is_empty() {
-        return Ok(Vec::new());
-    }
-    let session = Session::start(song, lanes, Arc::clone(&control), origin);
-    let watch = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        let mut view = if show { Some(View::start()?) } else { None };
-        let mut view_error = None;
-        // The bar being typed, and the bar playing (for `[` and `]`).
-        let mut typed = bars::Typed::default();
-        let mut bar_now = 1;
-        while !session.is_finished() {
-            if signalled.load(Ordering::SeqCst) {
-                control.stop();
-            }
-            if let Some(v) = view.as_mut() {
-                // The jump keys: digits and Enter go to the bar typed (Backspace takes a digit
-                // back), `[` to the bar before the one playing, `]` to the next.
-                let mut on_key = |key: Key| {
-                    let song = session.song();
-                    let jump = match key {
-                        Key::Char(c @ '0'..='9') => {
-                            typed.digit(c);
-                            None
-                        }
-                        Key::Backspace => {
-                            typed.back();
-                            None
-                        }
-                        Key::Enter => typed.enter(song),
-                        Key::Char('[') => bars::before(song, bar_now),
-                        Key::Char(']') => bars::after(song, bar_now),
-                        Key::Char(c) => {
-                            if let Some(k) = conductor.as_mut() {
-                                (k.on_key)(c);
-                            }
-                            None
-                        }
-                    };
-                    if let Some(t) = jump {
-                        control.jump_to(t);
-                    }
-                };
-                // Drawn every 20 ms; a key is taken as it comes.
-                if crate::view::keys(Some(&mut on_key), Duration::from_millis(20)) {
-                    control.stop();
-                }
-                if let Some(snapshot) = session.snapshot() {
-                    let mut scene = scene(snapshot, &title);
-                    bar_now = scene.bar;
-                    scene.command = command;
-                    scene.prompt = typed.shown().map(str::to_string);
-                    if let Some(c) = &conductor {
-                        scene.conductor = Some((c.status)());
-                    }
-                    if let Err(e) = v.draw(&scene) {
-                        view_error = Some(e);
-                        control.stop();
-                    }
-                }
-            } else {
-                std::thread::sleep(Duration::from_millis(20));
-            }
+    let mut view = None;
+    // The bar being typed, and the bar playing (for `[` and `]`).
+    let mut typed = bars::Typed::default();
+    let mut bar_now = 1;
+    let watch = |session: &Session| -> anyhow::Result<()> {
+        let control = session.control();
+        if signalled.load(Ordering::SeqCst) {
+            control.stop();
         }
-        drop(view);
-        anyhow::Ok(view_error)
-    }));
-    if watch.is_err() {
-        // The view panicked: stop the robots and let them go before the panic goes on.
-        control.stop();
-    }
-    let finished = session.finish();
-    if finished.priority_refused {
+        if !show {
+            std::thread::sleep(Duration::from_millis(20));
+            return Ok(());
+        }
+        if view.is_none() {
+            view = Some(View::start()?);
+        }
+        // The jump keys: digits and Enter go to the bar typed (Backspace takes a digit back),
+        // `[` to the bar before the one playing, `]` to the next.
+        let mut on_key = |key: Key| {
+            let song = session.song();
+            let jump = match key {
+                Key::Char(c @ '0'..='9') => {
+                    typed.digit(c);
+                    None
+                }
+                Key::Backspace => {
+                    typed.back();
+                    None
+                }
+                Key::Enter => typed.enter(song),
+                Key::Char('[') => bars::before(song, bar_now),
+                Key::Char(']') => bars::after(song, bar_now),
+                Key::Char(c) => {
+                    if let Some(k) = conductor.as_mut() {
+                        (k.on_key)(c);
+                    }
+                    None
+                }
+            };
+            if let Some(t) = jump {
+                control.jump_to(t);
+            }
+        };
+        // Drawn every 20 ms; a key is taken as it comes.
+        if crate::view::keys(Some(&mut on_key), Duration::from_millis(20)) {
+            control.stop();
+        }
+        let Some(snapshot) = session.snapshot() else {
+            return Ok(());
+        };
+        let mut scene = scene(snapshot, &title);
+        bar_now = scene.bar;
+        scene.command = command;
+        scene.prompt = typed.shown().map(str::to_string);
+        scene.conductor = conductor.as_ref().map(|c| (c.status)());
+        Ok(view.as_mut().expect("started").draw(&scene)?)
+    };
+    let watched = watch::play(song, lanes, control, origin, from_us, watch);
+    // The terminal is given back before anything is said.
+    drop(view);
+    if watched.priority_refused {
         eprintln!(
             "orch: note: the OS refused real-time priority to the sender; under load its \
              messages may be late (see lateness in the report)"
         );
     }
-    match watch {
-        Err(panic) => std::panic::resume_unwind(panic),
-        Ok(Err(e)) => return Err(e),
-        Ok(Ok(Some(e))) => return Err(e.into()),
-        Ok(Ok(None)) => {}
-    }
-    if let Some((spec, why)) = finished.failed {
-        return Err(match why {
-            SessionFailure::Performance(e) => {
-                anyhow::Error::new(e).context(format!("--out {}", spec.text))
-            }
-            SessionFailure::Panicked => anyhow::anyhow!(
-                "the sender thread of --out {} panicked (its keys were released)",
-                spec.text
-            ),
-        });
-    }
-    Ok(finished.ended)
+    watched.result.map_err(|e| match e {
+        WatchError::Panicked(panic) => std::panic::resume_unwind(panic),
+        WatchError::Front(e) => e,
+        WatchError::Failed(spec, SessionFailure::Performance(e)) => {
+            anyhow::Error::new(e).context(format!("--out {}", spec.text))
+        }
+        WatchError::Failed(spec, SessionFailure::Panicked) => anyhow::anyhow!(
+            "the sender thread of --out {} panicked (its keys were released)",
+            spec.text
+        ),
+    })
 }
 
 /// What the view shows of a session's snapshot.

@@ -70,6 +70,7 @@ pub mod setup;
 pub mod sources;
 pub mod text;
 pub mod thru;
+pub mod watch;
 pub mod writes;
 
 pub use analysis::{analyze, Analysis, Wrong};
