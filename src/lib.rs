@@ -1,8 +1,9 @@
 //! The `orch` program's pieces, so that tests can reach them; `main.rs` only parses the
 //! arguments and calls [`run()`].
 //!
-//! Host I/O lives here: reading files and standard input, the robot configuration, the live
-//! terminal view, and the engine that drives the core onto the virtual robot.
+//! A thin shell: each command parses its arguments, calls the libraries (`orch-stage` for
+//! everything a session, a report or an analysis needs; `orch-render`, `orch-calibrate`,
+//! `orch-baton` for theirs), and prints; the terminal's live view ([`view`]) is drawn here.
 //!
 //! Cargo features, off by default: `alsa`, `orch play --out alsa:CLIENT:PORT`, through
 //! orch-io's own `alsa` feature (it links alsa-lib: `libasound2-dev` to build); `camera`,
