@@ -33,44 +33,10 @@ fn robot(path: Option<&Path>) -> anyhow::Result<(Robot, String)> {
     }
 }
 
-fn round(v: f64) -> f64 {
-    (v * 100.0).round() / 100.0
-}
-
-/// The measurements as JSON:
-/// `{"capture_offset_ms":C,"anchor":{..},"keys":[{"note":N,"levels":[{"velocity":V,"press_delay_ms":D,"level_db":L}],"softest_velocity":S,"problems":[...],"fit":{..}}]}`.
+/// The measurements as JSON: `orch_calibrate::Calibration`'s own (the figures rounded to
+/// hundredths).
 pub fn json(cal: &Calibration) -> serde_json::Value {
-    let keys: Vec<_> = cal
-        .keys
-        .iter()
-        .map(|k| {
-            serde_json::json!({
-                "note": k.note,
-                "levels": k.levels.iter().map(|l| serde_json::json!({
-                    "velocity": l.velocity,
-                    "press_delay_ms": l.press_delay_ms.map(round),
-                    "level_db": l.level_db.map(round),
-                })).collect::<Vec<_>>(),
-                "softest_velocity": k.softest_velocity,
-                "problems": k.problems,
-                "fit": k.fit.map(|f| serde_json::json!({
-                    "press_delay_ms": round(f.press_delay_ms),
-                    "soft_press_delay_ms": round(f.soft_press_delay_ms),
-                    "softest_percent": round(f.softest_percent),
-                })),
-            })
-        })
-        .collect();
-    serde_json::json!({
-        "capture_offset_ms": round(cal.capture_offset_ms),
-        "anchor": {
-            "note": cal.anchor.note,
-            "press_delay_ms": cal.anchor.press_delay_ms,
-            "given": cal.anchor.given,
-        },
-        "keys": keys,
-        "warnings": cal.warnings,
-    })
+    serde_json::to_value(cal).expect("a calibration is JSON")
 }
 
 /// Runs `orch calibrate`.

@@ -16,11 +16,12 @@ use orch_stage::SourceError;
 
 use crate::cli::{ConductArgs, FollowMode};
 use crate::error::bad_input;
-use crate::play::{self, Conductor, LiveOptions};
+use crate::live::{self, Conductor, LiveOptions};
+use crate::play;
 
 /// Runs `orch conduct`.
 pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
-    play::init_logging(args.verbose);
+    live::init_logging(args.verbose);
     let spec = SourceSpec::parse(&args.source).map_err(bad_input)?;
     let tap = spec == SourceSpec::Tap;
     if tap && (args.no_view || !std::io::IsTerminal::is_terminal(&std::io::stdout())) {
@@ -59,7 +60,7 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
             let _ = tap_tx.send(stamp.now_us());
         }
     };
-    let played = play::play_live(
+    let played = live::play_live(
         song,
         lanes,
         LiveOptions {

@@ -10,6 +10,7 @@
 //! `orch conduct --source camera:/dev/video0`, through orch-baton's own `camera` feature (a
 //! V4L2 camera; the `v4l` crate's bindings are generated with libclang: `libclang-dev`).
 
+pub mod analyze;
 pub mod baton;
 pub mod calibrate;
 pub mod cli;
@@ -18,6 +19,7 @@ pub mod decode;
 pub mod error;
 pub mod input;
 pub mod interpret;
+pub mod live;
 pub mod play;
 pub mod render;
 pub mod robot;
@@ -30,7 +32,7 @@ pub fn run(command: cli::Command) -> anyhow::Result<()> {
         cli::Command::Decode(args) => decode::run(&args),
         cli::Command::Interpret(args) => interpret::run(&args),
         cli::Command::Play(args) => play::run_play(&args),
-        cli::Command::Analyze(args) => play::run_analyze(&args),
+        cli::Command::Analyze(args) => analyze::run(&args),
         cli::Command::Config(args) => robot::print_default(&args.boards),
         cli::Command::Baton(args) => baton::run(&args),
         cli::Command::Run(args) => run::run(&args),

@@ -121,7 +121,7 @@ fn flush_log(json: &mut Option<Log>) {
 
 /// `orch run`.
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
-    crate::play::init_logging(args.verbose);
+    crate::live::init_logging(args.verbose);
     let input = InTarget::parse(&args.input).map_err(|e| bad_input(e.to_string()))?;
     let out_spec = OutSpec::parse(&args.out).map_err(|e| bad_input(e.to_string()))?;
     let thru_specs: Vec<OutSpec> = args
