@@ -13,10 +13,10 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use orch_io::{InTarget, MidiIn, OutSpec, Target};
-use orch_stage::run::{counters, End, Event, Loop, Said};
+use orch_stage::run::{counters, end_state, End, Event, Loop, Said};
 use orch_stage::thru::Thru;
+use orch_stage::writes;
 use orch_stage::{BoardWrite, LiveBoards, LiveError, LiveRobot, ReloadRefused};
-use serde_json::json;
 
 use crate::cli::RunArgs;
 use crate::error::bad_input;
@@ -163,7 +163,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         Box::new(move |write: &BoardWrite| {
             let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
             // Standard output gone (a closed pipe): the robot plays on without the log.
-            let _ = writeln!(w, "{}", orch_stage::writes::json(write));
+            let _ = writeln!(w, "{}", writes::json(write));
         }) as Box<dyn FnMut(&BoardWrite) + Send>
     });
     let din = matches!(input, InTarget::Serial(_));
@@ -199,13 +199,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
 
     let stopped = live.stop().map_err(live_err);
     if let Some(w) = &json {
-        let list: Vec<_> = live
-            .outputs()
-            .iter()
-            .map(|&(address, outputs)| json!({"address": address, "outputs": outputs}))
-            .collect();
         let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
-        let _ = writeln!(w, "{}", json!({"type": "final", "boards": list}));
+        let _ = writeln!(w, "{}", writes::final_json(&end_state(&live)));
     }
     flush_log(&mut json);
     if args.verbose {

@@ -10,6 +10,7 @@ use std::time::{Duration, Instant as Wall};
 use orch_io::InEvent;
 use orch_robot::{Robot, RobotError};
 
+use crate::writes::BoardState;
 use crate::{LiveError, LiveRobot, ReloadRefused};
 
 /// What the loop waits for.
@@ -107,6 +108,19 @@ pub fn counters(live: &LiveRobot) -> String {
         lost,
         cut
     )
+}
+
+/// Every board's state when the loop has ended: its outputs (a PWM board's too, without its
+/// duties: the write log has them).
+pub fn end_state(live: &LiveRobot) -> Vec<BoardState> {
+    live.outputs()
+        .iter()
+        .map(|&(address, outputs)| BoardState {
+            address,
+            outputs,
+            duty: None,
+        })
+        .collect()
 }
 
 impl Loop<'_> {
