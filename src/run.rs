@@ -16,7 +16,7 @@ use orch_io::{InTarget, MidiIn, OutSpec, Target};
 use orch_stage::run::{counters, end_state, End, Event, Loop, Said};
 use orch_stage::thru::Thru;
 use orch_stage::writes;
-use orch_stage::{BoardWrite, LiveBoards, LiveError, LiveRobot, ReloadRefused};
+use orch_stage::{BoardWrite, LiveBoards, LiveError, LiveRobot};
 
 use crate::cli::RunArgs;
 use crate::error::bad_input;
@@ -59,37 +59,13 @@ fn live_err(e: LiveError) -> anyhow::Error {
     }
 }
 
-/// What the loop says, on standard error.
+/// What the loop says, on standard error, headed by what it is about.
 fn say(said: Said, input: &str) {
-    let restart = "restart orch run for that; the robot stays as it was";
     match said {
-        Said::TookOver => eprintln!("orch: the new robot configuration is in force"),
-        Said::Lost(e) => eprintln!(
-            "orch: --in {input}: the device went away ({e}); every key released; it is tried \
-             again every {} ms",
-            orch_io::RECONNECT_EVERY.as_millis()
-        ),
-        Said::Back => eprintln!("orch: --in {input}: the device is back"),
-        Said::Counters(c) => eprintln!("orch run: {c}"),
-        Said::NoFile => {
-            eprintln!("orch: SIGHUP: no --robot file to read again; the thesis's robot stays")
-        }
-        Said::Refused(path, e) => eprintln!(
-            "orch: SIGHUP: {} refused, the robot stays as it was: {e}",
-            path.display()
-        ),
-        Said::CannotReload(path, ReloadRefused::MovesBoards) => eprintln!(
-            "orch: SIGHUP: {} moves the I2C boards: {restart}",
-            path.display()
-        ),
-        Said::CannotReload(path, ReloadRefused::ChangesKinds) => eprintln!(
-            "orch: SIGHUP: {} changes the kind of a board (PCA9555, PCA9685): {restart}",
-            path.display()
-        ),
-        Said::Read(path) => eprintln!(
-            "orch: SIGHUP: {} read; it takes over when no key is down",
-            path.display()
-        ),
+        Said::Counters(_) => eprintln!("orch run: {said}"),
+        Said::Lost(_) | Said::Back => eprintln!("orch: --in {input}: {said}"),
+        Said::TookOver => eprintln!("orch: {said}"),
+        _ => eprintln!("orch: SIGHUP: {said}"),
     }
 }
 

@@ -53,6 +53,43 @@ pub enum Said {
     Read(PathBuf),
 }
 
+impl std::fmt::Display for Said {
+    /// What happened in words, as `orch run` says it (after its own head: the input for
+    /// [`Said::Lost`] and [`Said::Back`], the signal for a robot file read again).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let restart = "restart orch run for that; the robot stays as it was";
+        match self {
+            Said::TookOver => f.write_str("the new robot configuration is in force"),
+            Said::Lost(e) => write!(
+                f,
+                "the device went away ({e}); every key released; it is tried again every {} ms",
+                orch_io::RECONNECT_EVERY.as_millis()
+            ),
+            Said::Back => f.write_str("the device is back"),
+            Said::Counters(c) => f.write_str(c),
+            Said::NoFile => f.write_str("no --robot file to read again; the thesis's robot stays"),
+            Said::Refused(path, e) => write!(
+                f,
+                "{} refused, the robot stays as it was: {e}",
+                path.display()
+            ),
+            Said::CannotReload(path, ReloadRefused::MovesBoards) => {
+                write!(f, "{} moves the I2C boards: {restart}", path.display())
+            }
+            Said::CannotReload(path, ReloadRefused::ChangesKinds) => write!(
+                f,
+                "{} changes the kind of a board (PCA9555, PCA9685): {restart}",
+                path.display()
+            ),
+            Said::Read(path) => write!(
+                f,
+                "{} read; it takes over when no key is down",
+                path.display()
+            ),
+        }
+    }
+}
+
 /// Why the loop ended.
 #[derive(Debug)]
 pub enum End {
