@@ -34,8 +34,10 @@
 //! invented beat, or a speeding up not yet confirmed) and a very late one (a fermata) move
 //! nothing; the beat after a fermata is a restart, its error a one-beat error.
 
+use std::collections::VecDeque;
+
 use crate::conduct::{Action, Cue, ScoreBeats, Timed};
-use crate::meter::{Heard, Meter};
+use crate::meter::{Heard, Meter, TOLERANCE};
 use crate::tempo::{Tempo, TimeMap};
 
 /// The phase-following gain for a one-beat error: the share of it made up over the next beat.
@@ -50,6 +52,11 @@ pub const PHASE_LIMIT: f64 = 0.15;
 /// note (0.25) either way. In beats of the score made up in one beat, that is at most 0.32
 /// (catching up) and 0.19 (waiting).
 pub const PHASE_CATCH_UP: f64 = 0.24;
+
+/// The most a beat not yet explained moves the performance's notes, µs: the hedge taken
+/// while it may still be an invented beat or a missed one (which may move no note by more
+/// than 25 ms), at the pace of a consistent error.
+pub const HEDGE_US: f64 = 20_000.0;
 
 /// The tempo factors the follower gives: a twentieth to twenty times as written (as
 /// `orch play --tempo` takes).
@@ -91,7 +98,34 @@ pub struct Follower {
     quarter: Option<f64>,
     /// The phase error at the last beat taken, beats.
     last_error: Option<f64>,
+    /// From the last beats' own times to their cues' arrival, µs, newest last (a baton's
+    /// ictus is told two frames late): how long after a beat's time its cue may come.
+    lags: VecDeque<u64>,
+    /// When a hedge or a pull has made up its share: back to the rate then (µs on the
+    /// performer's clock).
+    settle: Option<u64>,
+    /// What the beats have left open, and when it is settled without a beat (µs).
+    expect: Option<(u64, Expect)>,
 }
+
+/// What the follower waits for between beats (phase-following only).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Expect {
+    /// The beat in time with the last one taken: by then it is overdue (a missed beat, a
+    /// slowing down, a fermata).
+    Beat,
+    /// An early beat held back, at `at` (µs), which would be quarter `quarter`: by then no beat
+    /// in time with the last one taken has come, so it was not invented.
+    Early {
+        /// Its time, µs.
+        at: u64,
+        /// The quarter it would be.
+        quarter: f64,
+    },
+}
+
+/// Cues' lags kept.
+const LAGS: usize = 4;
 
 impl Follower {
     /// A follower of a score whose quarter notes are `beats`.
@@ -102,7 +136,62 @@ impl Follower {
             meter: Meter::new(),
             quarter: None,
             last_error: None,
+            lags: VecDeque::new(),
+            settle: None,
+            expect: None,
         }
+    }
+
+    /// When the follower is to be woken with no cue ([`wake`](Self::wake)), µs on the
+    /// performer's clock: the end of a hedge or a pull, or the moment a beat in time with the
+    /// last one is overdue. `None`: nothing to wait for.
+    pub fn due(&self) -> Option<u64> {
+        match (self.settle, self.expect.map(|e| e.0)) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// No cue has come until `now_us` (at or past [`due`](Self::due)): what to do, the
+    /// performance's time map being `map`. See the [module notes](self).
+    pub fn wake(&mut self, now_us: u64, map: Option<&TimeMap>) -> Action {
+        let (Some(m), Some(period), Follow::Phase { catch_up, .. }) =
+            (map, self.meter.period(), self.follow)
+        else {
+            self.settle = None;
+            self.expect = None;
+            return Action::Nothing;
+        };
+        let (here, len) = self.beats.at(m.score(now_us as i64));
+        let rate = len / period;
+        if let Some((_, what)) = self.expect.filter(|e| e.0 <= now_us) {
+            self.expect = None;
+            self.settle = None;
+            // The performance's notes moved `d` µs at factor `f` in `wall` µs: `f` a
+            // consistent error's most, held until they have moved as far as they may.
+            let (f, d) = match what {
+                // Overdue: a missed beat, or a slowing down. A hedge: slower, as far as a
+                // missed beat may move a note.
+                Expect::Beat => (rate / (1.0 + catch_up), HEDGE_US),
+                // The early beat was a real one: catch it up, as fast as a consistent error,
+                // as far as the conductor has gone at least (from it at the old rate).
+                Expect::Early { at, quarter } => {
+                    let gap = quarter + now_us.saturating_sub(at) as f64 / period - here;
+                    (rate / (1.0 - catch_up), gap * period)
+                }
+            };
+            if d > 0.0 && here > 0.0 {
+                let wall = d / (f / rate - 1.0).abs();
+                self.settle = Some(now_us + wall.round() as u64);
+                return factor(f);
+            }
+            return factor(rate);
+        }
+        if self.settle.is_some_and(|s| s <= now_us) {
+            self.settle = None;
+            return factor(rate);
+        }
+        Action::Nothing
     }
 
     /// The conductor's tempo, as last heard or measured (quarter notes a minute).
@@ -140,7 +229,23 @@ impl Follower {
             self.meter.state(60e6 / bpm);
             self.meter.restart();
         }
+        let held = self.meter.held();
         let heard = t.map(|t| self.meter.beat(t));
+        if let (Some(t), Some(Heard::Odd { .. })) = (t, heard) {
+            if held == Some(t) || self.meter.held() != Some(t) {
+                // Ignored (a beat sent twice): what was open stays open.
+                return Action::Nothing;
+            }
+        }
+        // A beat, or a tempo stated: what the beats had left open is settled by it.
+        self.settle = None;
+        self.expect = None;
+        if let Some(t) = t {
+            self.lags.push_back(now.saturating_sub(t));
+            if self.lags.len() > LAGS {
+                self.lags.pop_front();
+            }
+        }
         let Some(period) = self.meter.period() else {
             // The first beat: the phase is noted, no rate yet.
             if let (Some(t), Some(m)) = (t, map) {
@@ -171,9 +276,12 @@ impl Follower {
                 None => (pos.round(), false),
             },
             Heard::Odd { late } => {
-                // Not taken: the rate stands; a late one pulls a performance that is ahead.
+                // Not taken: the rate stands; a late one pulls a performance that is ahead,
+                // an early one is hedged toward until it cannot have been invented.
                 let q = self.quarter.map_or(pos.round(), |q| q + 1.0);
                 let e = pos - q;
+                let last = self.meter.last().unwrap_or(t);
+                let early = ((t - last) as f64) < period && self.quarter.is_some();
                 return match self.follow {
                     // The conductor's beat is late and the performance ahead of it: wait for
                     // it, as far as one beat may stretch.
@@ -181,10 +289,27 @@ impl Follower {
                         let wait = e.min(1.0 - 1.0 / (1.0 + catch_up));
                         self.pulled(m, t, now, period, pos, wait)
                     }
+                    // Early: it was invented if a beat comes in time with the last one taken;
+                    // past the last moment one could (and its cue arrive), it was not.
+                    Follow::Phase { catch_up, .. } if early && e < 0.0 && pos > 0.0 => {
+                        let expiry = self.in_time_until(last, period);
+                        self.expect = Some((expiry, Expect::Early { at: t, quarter: q }));
+                        // Until then a hedge: toward it, as far as an invented beat may move a
+                        // note.
+                        let here = m.score(now as i64);
+                        let rate = self.beats.at(here).1 / period;
+                        let d = HEDGE_US.min(-e * period);
+                        let wall = d * (1.0 - catch_up) / catch_up;
+                        self.settle = Some(now + wall.round() as u64);
+                        factor(rate / (1.0 - catch_up))
+                    }
                     _ => Action::Nothing,
                 };
             }
         };
+        if let Follow::Phase { .. } = self.follow {
+            self.expect = Some((self.in_time_until(t, period), Expect::Beat));
+        }
         self.quarter = Some(quarter);
         let e = pos - quarter;
         let consistent = consistent
@@ -227,11 +352,20 @@ impl Follower {
         factor((target - here) / left)
     }
 
+    /// The last moment a beat in time with the one taken at `last` could arrive (its cue
+    /// as late as the last beats' were), µs.
+    fn in_time_until(&self, last: u64, period: f64) -> u64 {
+        let lag = self.lags.iter().copied().max().unwrap_or(0);
+        last + (period * (1.0 + TOLERANCE)).round() as u64 + lag
+    }
+
     /// The beats so far are forgotten (the transport moved): the next beat starts again.
     fn forget(&mut self) {
         self.meter.restart();
         self.quarter = None;
         self.last_error = None;
+        self.settle = None;
+        self.expect = None;
     }
 }
 
@@ -330,6 +464,126 @@ mod tests {
             (1.0 / t.get() - (1.0 + PHASE_CATCH_UP)).abs() < 1e-6,
             "{t:?}"
         );
+    }
+
+    #[test]
+    fn an_early_beat_is_hedged_toward_then_caught_up_once_it_cannot_be_invented() {
+        // 120 BPM beats on a score at 120, played as written from 0: on the beat. Then a beat
+        // 0.3 beat early (at 2.35 s instead of 2.5).
+        let beats = ScoreBeats::from_times((0..100).map(|i| i * 500_000).collect());
+        let map = TimeMap::new(0, Tempo::NORMAL);
+        let beat = |t| at(t, Cue::Beat { t_us: t, bpm: None });
+        let fresh = || {
+            let mut f = Follower::new(beats.clone(), Follow::PHASE);
+            for t in [0, 500_000, 1_000_000, 1_500_000, 2_000_000] {
+                f.cue(&beat(t), Some(&map));
+            }
+            f
+        };
+        let mut f = fresh();
+        // Overdue 1.12 beat after the last.
+        assert_eq!(f.due(), Some(2_560_000));
+        let fast = 1.0 / (1.0 - PHASE_CATCH_UP);
+        let tempo = |a: Action| match a {
+            Action::Tempo(t) => t.get(),
+            a => panic!("{a:?}"),
+        };
+        // The hedge: as fast as a consistent error, until the notes have moved HEDGE_US.
+        assert!((tempo(f.cue(&beat(2_350_000), Some(&map))) - fast).abs() < 1e-9);
+        let hedge_end = 2_350_000 + (HEDGE_US / (fast - 1.0)).round() as u64;
+        assert_eq!(f.due(), Some(hedge_end));
+        let mut m = map;
+        m.change(2_350_000, Tempo::new(fast).unwrap());
+        assert!((tempo(f.wake(hedge_end, Some(&m))) - 1.0).abs() < 1e-9);
+        m.change(hedge_end as i64, Tempo::NORMAL);
+        // Moved by the hedge, and no more.
+        assert!((m.wall(2_500_000) - 2_480_000).abs() <= 1, "{m:?}");
+        // Until a beat in time with the last could no longer come, nothing more.
+        assert_eq!(f.due(), Some(2_560_000));
+        assert_eq!(f.wake(2_559_999, Some(&m)), Action::Nothing);
+        assert_eq!(f.bpm(), Some(120.0));
+        // Then it was a real beat: caught up as fast as a consistent error may, until the
+        // performance stands where the conductor does at least (from the early beat at the
+        // old tempo): 0.3 beat, less the hedge's 0.04.
+        assert!((tempo(f.wake(2_560_000, Some(&m))) - fast).abs() < 1e-9);
+        let behind = 0.3 * 500_000.0 - HEDGE_US;
+        let until = 2_560_000 + (behind / (fast - 1.0)).round() as u64;
+        assert_eq!(f.due(), Some(until));
+        // The tempo stands: one odd interval is not a new tempo.
+        assert_eq!(f.bpm(), Some(120.0));
+        m.change(2_560_000, Tempo::new(fast).unwrap());
+        assert!((tempo(f.wake(until, Some(&m))) - 1.0).abs() < 1e-9);
+        m.change(until as i64, Tempo::NORMAL);
+        let q = beats.at(m.score(until as i64)).0;
+        assert!(
+            (q - (5.0 + (until - 2_350_000) as f64 / 500_000.0)).abs() < 1e-3,
+            "{q}"
+        );
+        // The next beat agrees with the early one: the change is taken, the tempo jumps.
+        f.cue(&beat(2_700_000), Some(&m));
+        assert!((f.bpm().unwrap() - 60e6 / 350_000.0).abs() < 1e-6);
+
+        // Invented: the beat in time with the last comes, the hedge is all that moved.
+        let mut f = fresh();
+        f.cue(&beat(2_350_000), Some(&map));
+        // Sent twice (told again 50 ms later): the second changes nothing.
+        let again = at(
+            2_400_000,
+            Cue::Beat {
+                t_us: 2_350_000,
+                bpm: None,
+            },
+        );
+        assert_eq!(f.cue(&again, Some(&map)), Action::Nothing);
+        assert_eq!(f.due(), Some(hedge_end));
+        let Action::Tempo(_) = f.cue(&beat(2_500_000), Some(&map)) else {
+            panic!()
+        };
+        assert_eq!(f.due(), Some(2_500_000 + 560_000));
+        assert_eq!(f.bpm(), Some(120.0));
+
+        // Rate only: nothing to wait for.
+        let mut f = Follower::new(beats.clone(), Follow::Immediate);
+        for t in [0, 500_000, 1_000_000, 2_350_000] {
+            f.cue(&beat(t), Some(&map));
+        }
+        assert_eq!(f.due(), None);
+    }
+
+    #[test]
+    fn an_overdue_beat_is_hedged_for_as_far_as_a_missed_beat_may_move_a_note() {
+        let beats = ScoreBeats::from_times((0..100).map(|i| i * 500_000).collect());
+        let map = TimeMap::new(0, Tempo::NORMAL);
+        let mut f = Follower::new(beats, Follow::PHASE);
+        for t in [0, 500_000, 1_000_000] {
+            f.cue(&at(t, Cue::Beat { t_us: t, bpm: None }), Some(&map));
+        }
+        assert_eq!(f.due(), Some(1_560_000));
+        let slow = 1.0 / (1.0 + PHASE_CATCH_UP);
+        let Action::Tempo(t) = f.wake(1_560_000, Some(&map)) else {
+            panic!()
+        };
+        assert!((t.get() - slow).abs() < 1e-9, "{t:?}");
+        let end = 1_560_000 + (HEDGE_US / (1.0 - slow)).round() as u64;
+        assert_eq!(f.due(), Some(end));
+        let mut m = map;
+        m.change(1_560_000, t);
+        assert_eq!(f.wake(end, Some(&m)), Action::Tempo(Tempo::NORMAL));
+        m.change(end as i64, Tempo::NORMAL);
+        assert!((m.wall(1_000_000) - 1_020_000).abs() <= 1, "{m:?}");
+        assert_eq!(f.due(), None);
+        // A cue told late (a baton's): the overdue moment waits as long after the beat.
+        let mut f = Follower::new(
+            ScoreBeats::from_times((0..100).map(|i| i * 500_000).collect()),
+            Follow::PHASE,
+        );
+        for t in [0u64, 500_000, 1_000_000] {
+            f.cue(
+                &at(t + 80_000, Cue::Beat { t_us: t, bpm: None }),
+                Some(&map),
+            );
+        }
+        assert_eq!(f.due(), Some(1_640_000));
     }
 
     #[test]
