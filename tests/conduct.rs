@@ -17,19 +17,25 @@ use orch_perform::{
 use orch_seq::{Bell, Clock, Lateness, Song, VirtualClock};
 
 /// A clock whose waits deliver the video's frames falling inside them, each at its time
-/// (µs after the score's start: the video's time 0 is the score's, as `orch conduct` does).
-struct Filmed<F: FnMut(usize, u64, &Control)> {
+/// (µs after the score's start: the video's time 0 is the score's, as `orch conduct` does),
+/// through `apply` with the frame's index; `apply` returns when it wants to be called with no
+/// frame (the follower's [`due`](Follower::due), on the wall clock), as `orch conduct`'s
+/// waker calls the follower between cues.
+struct Filmed<F: FnMut(Option<usize>, u64, &Control) -> Option<u64>> {
     inner: VirtualClock,
     frames: Vec<u64>,
     next: usize,
+    /// When `apply` asked to be called with no frame (wall clock), if it did.
+    wake: Option<u64>,
     start: Option<u64>,
     control: Arc<Control>,
     apply: F,
 }
 
-impl<F: FnMut(usize, u64, &Control)> Filmed<F> {
-    /// Delivers the frames up to `deadline_us`; with `bell`, stops after the first that rings
-    /// it (after `seen` rings), the clock at that frame's time: whether one did.
+impl<F: FnMut(Option<usize>, u64, &Control) -> Option<u64>> Filmed<F> {
+    /// Delivers the frames and wakes up to `deadline_us` (a frame before a wake at the same
+    /// time); with `bell`, stops after the first that rings it (after `seen` rings), the clock
+    /// at that call's time: whether one did.
     fn deliver(&mut self, deadline_us: u64, bell: Option<(&Bell, u64)>) -> bool {
         if self.start.is_none() {
             self.start = self.control.time_map().map(|m| m.wall(0).max(0) as u64);
@@ -37,13 +43,25 @@ impl<F: FnMut(usize, u64, &Control)> Filmed<F> {
         let Some(s) = self.start else {
             return false;
         };
-        while let Some(&t) = self.frames.get(self.next) {
-            if s + t > deadline_us {
+        loop {
+            let frame = self.frames.get(self.next).map(|&t| s + t);
+            let (at, which) = match (frame, self.wake) {
+                (Some(f), Some(w)) if w < f => (w, None),
+                (Some(f), _) => (f, Some(self.next)),
+                (None, Some(w)) => (w, None),
+                (None, None) => break,
+            };
+            if at > deadline_us {
                 break;
             }
-            self.inner.advance_to(s + t);
-            (self.apply)(self.next, s + t, &self.control);
-            self.next += 1;
+            self.inner.advance_to(at);
+            if which.is_some() {
+                self.next += 1;
+            }
+            // A wake asked for the present or the past, after a wake: not again.
+            self.wake = (self.apply)(which, at, &self.control)
+                .filter(|&w| w > at || which.is_some())
+                .map(|w| w.max(at));
             if bell.is_some_and(|(b, seen)| b.rung() > seen) {
                 return true;
             }
@@ -52,7 +70,7 @@ impl<F: FnMut(usize, u64, &Control)> Filmed<F> {
     }
 }
 
-impl<F: FnMut(usize, u64, &Control)> Clock for Filmed<F> {
+impl<F: FnMut(Option<usize>, u64, &Control) -> Option<u64>> Clock for Filmed<F> {
     fn now_us(&self) -> u64 {
         self.inner.now_us()
     }
@@ -119,9 +137,10 @@ fn conduct_with_video(video: &Video, follow: Follow) -> Followed {
         inner: VirtualClock::new(),
         frames,
         next: 0,
+        wake: None,
         start: None,
         control: Arc::clone(&control),
-        apply: |j: usize, t: u64, c: &Control| {
+        apply: |j: Option<usize>, t: u64, c: &Control| {
             let map = c.time_map().unwrap();
             let s = *start.get_or_insert(map.wall(0).max(0) as u64);
             if let Some((ictus, asked)) = waiting {
@@ -131,9 +150,14 @@ fn conduct_with_video(video: &Video, follow: Follow) -> Followed {
                     waiting = None;
                 }
             }
+            let Some(j) = j else {
+                // Woken with no frame: as `orch conduct`'s waker does.
+                follower.wake(t, Some(&map)).apply(c, t);
+                return follower.due();
+            };
             let (t_ms, frame) = video.frame_at(kept[j]);
             let Some(b) = baton.push(t_ms, &frame) else {
-                return;
+                return follower.due();
             };
             let ictus = (s as f64 + (b.t_ms * 1000.0 - first_us as f64).round()).max(0.0) as u64;
             let cue = Timed {
@@ -156,6 +180,7 @@ fn conduct_with_video(video: &Video, follow: Follow) -> Followed {
                 out.beats
                     .push((truth, tempo.get() * bpm0, (pos - pos.round()).abs()));
             }
+            follower.due()
         },
     };
     let mut live = |_: &orch_perform::Live| {};
@@ -408,7 +433,9 @@ fn osc_beats_over_loopback_changing_from_100_to_130_bpm_are_followed_within_25_m
     // is told to strike); a conductor sends `/orch/beat` over loopback, one a beat after the
     // first note, 16 beats at 100 BPM, then 16 at 130. Each note against the beat it belongs
     // to (note k, beat k; the beat's time is when it was sent): within 25 ms at the steady
-    // tempo, and from the third beat after the change is recognised (its second beat) on.
+    // tempo (an invented beat among them), and from the change's third beat on (beat 19; the
+    // change is recognised at its second, and its first is caught up from the moment it can
+    // no longer be an invented beat: `orch conduct` wakes the follower then, between beats).
     let file = scratch("osc-beats.mid");
     std::fs::write(&file, support::quarters_smf(40, 100.0)).unwrap();
     let sink = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
@@ -448,6 +475,14 @@ fn osc_beats_over_loopback_changing_from_100_to_130_bpm_are_followed_within_25_m
     let mut beats = vec![first];
     let mut due = first;
     for k in 1..=32 {
+        if k == 9 {
+            // An invented beat, 0.4 beat after beat 8: it moves no note by more than 25 ms
+            // (the follower's hedge toward it is ended by a wake, not by the next beat).
+            std::thread::sleep(
+                (due + Duration::from_millis(240)).saturating_duration_since(Instant::now()),
+            );
+            tx.send_to(&beat, ("127.0.0.1", port)).unwrap();
+        }
         due += Duration::from_secs_f64(if k <= 16 { 0.6 } else { 60.0 / 130.0 });
         std::thread::sleep(due.saturating_duration_since(Instant::now()));
         beats.push(Instant::now());
@@ -472,7 +507,7 @@ fn osc_beats_over_loopback_changing_from_100_to_130_bpm_are_followed_within_25_m
         .collect();
     println!("OSC beats over loopback, 100 -> 130 BPM: note - beat, ms: {e:.1?}");
     for (k, x) in e.iter().enumerate() {
-        if k <= 16 || k >= 21 {
+        if k <= 16 || k >= 19 {
             assert!(x.abs() <= 25.0, "beat {k}: {e:.1?}");
         }
     }
