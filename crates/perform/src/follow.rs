@@ -22,18 +22,52 @@
 //! beat, at most [`PHASE_LIMIT`] (0.15) of a beat a beat. A **consistent** error (the same
 //! sign as the last beat's, or the error a confirmed change of tempo left) is made up whole
 //! over the next beat as far as [`PHASE_CATCH_UP`] allows: the performance's beat may then
-//! last from 0.76 to 1.24 of the conductor's, so no beat of it is longer or shorter than the
-//! conductor's by as much as a sixteenth note (0.25 beat). That makes up to 0.32 of a beat
-//! when behind and 0.19 when ahead in one beat (0.15 before): the error an abrupt change of
-//! 30 % leaves while it is confirmed (about 0.35 beat behind, 0.5 ahead) is gone in two and
-//! three beats.
+//! last from 0.76 to 1.24 of the conductor's (as the follower has it: the rate), so no beat of
+//! it is longer or shorter than that by as much as a sixteenth note (0.25 beat). That makes up
+//! to 0.32 of a beat when behind and 0.19 when ahead in one beat (0.15 before). No pull, at a
+//! beat or between beats, takes a beat of the performance past those limits.
 //!
-//! A beat held back as odd and late (more than a period late, less than two: a slowing down
-//! not yet confirmed) finds the performance ahead of it: the performance waits for the
-//! conductor, as far as one beat may stretch (1.24 of the conductor's). An early odd beat (an
-//! invented beat, or a speeding up not yet confirmed) and a very late one (a fermata) move
-//! nothing; the beat after a fermata is a restart, its error a one-beat error.
-
+//! **Between beats** ([`due`](Follower::due), [`wake`](Follower::wake): the front end wakes
+//! the follower when it asks, on the performer's clock, as `orch conduct` does), phase-following
+//! only:
+//!
+//! - An **early** odd beat (an invented beat, or a speeding up not yet confirmed) finds the
+//!   performance behind it. While a beat in time with the last one taken may still come (up
+//!   to 1.12 period after it, plus the delay with which the last cues came after their beats),
+//!   it may be an invented beat, which may move no note by more than 25 ms: the performance
+//!   only hedges toward it, [`HEDGE_US`] (20 ms) at the pace of a consistent error. Once that
+//!   moment has passed with no beat, the early beat was a real one: the performance catches
+//!   it up as fast as a consistent error, until it stands where the conductor is at least (the
+//!   early beat's quarter, and the old tempo from there). The rate stays: a single interval is
+//!   still not a new tempo; the next beat confirms the change (the rate jumps) or not.
+//! - A beat **overdue** (none by 1.12 period after the last taken: a missed beat, a slowing
+//!   down, a fermata): a hedge, 20 ms slower (a missed beat's next beat then finds the notes
+//!   20 ms late, and pulls them back). A **late** odd beat (more than a period late, less than
+//!   two: a slowing down not yet confirmed) finds the performance ahead of it: it waits for the
+//!   conductor, as far as one beat may stretch (1.24 of the conductor's). A very late one (a
+//!   fermata) moves nothing more; the beat after a fermata is a restart, its error a one-beat
+//!   error.
+//! - A hedge or a pull that has made up its share goes back to the rate.
+//!
+//! **How soon an abrupt change is followed** (every note within 25 ms of its beat; the change's
+//! first beat is its 1st, the last at the old tempo its 0th). Faster, 100 → 130 BPM (beats of
+//! 600 ms become 461.5): the 1st beat may be an invented one until 672 ms, so the note there
+//! comes at 575 ms at the earliest, 113 ms late (here 118); from 672 ms the performance may
+//! play a quarter in 0.75 × 600 ms at the fastest, so at the 2nd beat (923 ms) it stands at
+//! 1.72 quarters at most and its note comes 97 ms late at least (here 105); the **3rd** is
+//! reached (0 ms). Slower, 130 → 90 BPM (461.5 ms become 666.7): the 3rd and the 4th beats
+//! cannot be reached by any follower within the rules, whatever its constants. Before
+//! 461.5 ms it cannot tell this from the steady tempo, whose beat there must find its note
+//! within 25 ms; from then until the 1st beat (666.7 ms) a beat may at most stretch to 1.25 of
+//! the conductor's (0.2 ms a ms): the performance stands at least 66 ms short of the old
+//! tempo's 1.445 quarters there, at 1.301. That beat is one odd interval: the rate stays 130
+//! until the 2nd beat (1333 ms), a quarter lasts 1.25 × 461.5 = 577 ms at the slowest, so the
+//! performance stands at 2.457 quarters at least there (the conductor at 2). At 90 a quarter
+//! lasts 1.25 × 666.7 = 833 ms at the slowest: the performance reaches quarter 3 by 1786 ms,
+//! 214 ms before the 3rd beat, and quarter 4 by 2619 ms, **47 ms before the 4th**. The 5th is
+//! the first that can be reached, and is (0 ms; here 308 and 148 ms early at the 3rd and 4th,
+//! with the constants above). Reaching the 3rd would take the single 1.44-period interval as
+//! the new tempo, or a beat stretched to far past a sixteenth.
 use std::collections::VecDeque;
 
 use crate::conduct::{Action, Cue, ScoreBeats, Timed};
@@ -200,7 +234,9 @@ impl Follower {
     }
 
     /// What to do about `timed` (a cue and when it arrived), the performance's time map being
-    /// `map` (`None` before it starts: then only a tempo can be taken).
+    /// `map` (`None` before it starts: then only a tempo can be taken). Between cues, the
+    /// follower is to be woken at [`due`](Self::due) ([`wake`](Self::wake)): a hedge toward an
+    /// odd beat ends there, and an early beat is caught up from there.
     pub fn cue(&mut self, timed: &Timed, map: Option<&TimeMap>) -> Action {
         let now = timed.t_us;
         let (t, stated) = match timed.cue {

@@ -49,13 +49,18 @@ fn follow_clock(song: &Song, clocks: &[u64], follow: Follow) -> (Vec<f64>, f64) 
     times.extend_from_slice(clocks);
     let mut first = true;
     let mut clock = Conducted::new(&control, times, |t: u64, k, c: &Control| {
+        if k.is_none() {
+            // Woken with no clock byte.
+            follower.wake(t, c.time_map().as_ref()).apply(c, t);
+            return follower.due();
+        }
         // Start comes just before the first clock (at the same µs here).
         let byte = if std::mem::take(&mut first) {
             0xFA
         } else {
             0xF8
         };
-        let Some(cue) = k.and_then(|_| decoder.feed(t, byte)) else {
+        let Some(cue) = decoder.feed(t, byte) else {
             return follower.due();
         };
         let map = c.time_map();

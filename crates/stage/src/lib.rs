@@ -10,7 +10,8 @@
 //!   clock from a byte stream or UDP, OSC over UDP), parsed from a `--source` text
 //!   ([`sources::SourceSpec`]), opened ([`sources::open_source`]) and followed
 //!   ([`sources::follow`]: each cue to the follower, its answer to the performance's
-//!   `Control`), with what the conductor did ([`sources::Status`]).
+//!   `Control`, and the follower woken between cues when it asks), with what the conductor
+//!   did ([`sources::Status`]).
 //!
 //! - [`live`]: the live interpreter loop ([`LiveRobot`]): live MIDI bytes in, orch-core's
 //!   interpreter and guard, finger boards out (the virtual robot, or boards on a Linux I2C
