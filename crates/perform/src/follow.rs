@@ -35,14 +35,14 @@
 //!   performance behind it. While a beat in time with the last one taken may still come (up
 //!   to 1.12 period after it, plus the delay with which the last cues came after their beats),
 //!   it may be an invented beat, which may move no note by more than 25 ms: the performance
-//!   only hedges toward it, [`HEDGE_US`] (20 ms) at the pace of a consistent error. Once that
+//!   only hedges toward it, [`HEDGE_US`] (15 ms) at the pace of a consistent error. Once that
 //!   moment has passed with no beat, the early beat was a real one: the performance catches
 //!   it up as fast as a consistent error, until it stands where the conductor is at least (the
 //!   early beat's quarter, and the old tempo from there). The rate stays: a single interval is
 //!   still not a new tempo; the next beat confirms the change (the rate jumps) or not.
 //! - A beat **overdue** (none by 1.12 period after the last taken: a missed beat, a slowing
-//!   down, a fermata): a hedge, 20 ms slower (a missed beat's next beat then finds the notes
-//!   20 ms late, and pulls them back). A **late** odd beat (more than a period late, less than
+//!   down, a fermata): a hedge, 15 ms slower (a missed beat's next beat then finds the notes
+//!   15 ms late, and pulls them back). A **late** odd beat (more than a period late, less than
 //!   two: a slowing down not yet confirmed) finds the performance ahead of it: it waits for the
 //!   conductor, as far as one beat may stretch (1.24 of the conductor's). A very late one (a
 //!   fermata) moves nothing more; the beat after a fermata is a restart, its error a one-beat
@@ -52,9 +52,9 @@
 //! **How soon an abrupt change is followed** (every note within 25 ms of its beat; the change's
 //! first beat is its 1st, the last at the old tempo its 0th). Faster, 100 → 130 BPM (beats of
 //! 600 ms become 461.5): the 1st beat may be an invented one until 672 ms, so the note there
-//! comes at 575 ms at the earliest, 113 ms late (here 118); from 672 ms the performance may
+//! comes at 575 ms at the earliest, 113 ms late (here 123); from 672 ms the performance may
 //! play a quarter in 0.75 × 600 ms at the fastest, so at the 2nd beat (923 ms) it stands at
-//! 1.72 quarters at most and its note comes 97 ms late at least (here 105); the **3rd** is
+//! 1.72 quarters at most and its note comes 97 ms late at least (here 108); the **3rd** is
 //! reached (0 ms). Slower, 130 → 90 BPM (461.5 ms become 666.7): the 3rd and the 4th beats
 //! cannot be reached by any follower within the rules, whatever its constants. Before
 //! 461.5 ms it cannot tell this from the steady tempo, whose beat there must find its note
@@ -65,7 +65,7 @@
 //! performance stands at 2.457 quarters at least there (the conductor at 2). At 90 a quarter
 //! lasts 1.25 × 666.7 = 833 ms at the slowest: the performance reaches quarter 3 by 1786 ms,
 //! 214 ms before the 3rd beat, and quarter 4 by 2619 ms, **47 ms before the 4th**. The 5th is
-//! the first that can be reached, and is (0 ms; here 308 and 148 ms early at the 3rd and 4th,
+//! the first that can be reached, and is (0 ms; here 317 and 157 ms early at the 3rd and 4th,
 //! with the constants above). Reaching the 3rd would take the single 1.44-period interval as
 //! the new tempo, or a beat stretched to far past a sixteenth.
 use std::collections::VecDeque;
@@ -90,7 +90,7 @@ pub const PHASE_CATCH_UP: f64 = 0.24;
 /// The most a beat not yet explained moves the performance's notes, µs: the hedge taken
 /// while it may still be an invented beat or a missed one (which may move no note by more
 /// than 25 ms), at the pace of a consistent error.
-pub const HEDGE_US: f64 = 20_000.0;
+pub const HEDGE_US: f64 = 15_000.0;
 
 /// The tempo factors the follower gives: a twentieth to twenty times as written (as
 /// `orch play --tempo` takes).
@@ -533,14 +533,14 @@ mod tests {
         assert!((tempo(f.wake(hedge_end, Some(&m))) - 1.0).abs() < 1e-9);
         m.change(hedge_end as i64, Tempo::NORMAL);
         // Moved by the hedge, and no more.
-        assert!((m.wall(2_500_000) - 2_480_000).abs() <= 1, "{m:?}");
+        assert!((m.wall(2_500_000) - 2_485_000).abs() <= 1, "{m:?}");
         // Until a beat in time with the last could no longer come, nothing more.
         assert_eq!(f.due(), Some(2_560_000));
         assert_eq!(f.wake(2_559_999, Some(&m)), Action::Nothing);
         assert_eq!(f.bpm(), Some(120.0));
         // Then it was a real beat: caught up as fast as a consistent error may, until the
         // performance stands where the conductor does at least (from the early beat at the
-        // old tempo): 0.3 beat, less the hedge's 0.04.
+        // old tempo): 0.3 beat, less the hedge's 0.03.
         assert!((tempo(f.wake(2_560_000, Some(&m))) - fast).abs() < 1e-9);
         let behind = 0.3 * 500_000.0 - HEDGE_US;
         let until = 2_560_000 + (behind / (fast - 1.0)).round() as u64;
@@ -606,7 +606,7 @@ mod tests {
         m.change(1_560_000, t);
         assert_eq!(f.wake(end, Some(&m)), Action::Tempo(Tempo::NORMAL));
         m.change(end as i64, Tempo::NORMAL);
-        assert!((m.wall(1_000_000) - 1_020_000).abs() <= 1, "{m:?}");
+        assert!((m.wall(1_000_000) - 1_015_000).abs() <= 1, "{m:?}");
         assert_eq!(f.due(), None);
         // A cue told late (a baton's): the overdue moment waits as long after the beat.
         let mut f = Follower::new(
