@@ -5,7 +5,6 @@ mod support;
 
 use std::io::Write;
 use std::process::{Command, Stdio};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use orch_baton::synth::{Script, Video};
@@ -14,86 +13,16 @@ use orch_perform::{
     perform, song_events, Action, Control, Cue, Follow, Follower, MidiRecording, Outcome,
     ScoreBeats, Tempo, Timed,
 };
-use orch_seq::{Bell, Clock, Lateness, Song, VirtualClock};
+use orch_seq::Song;
 
-/// A clock whose waits deliver the video's frames falling inside them, each at its time
+/// The clock that delivers the video's frames falling inside its waits, each at its time
 /// (µs after the score's start: the video's time 0 is the score's, as `orch conduct` does),
-/// through `apply` with the frame's index; `apply` returns when it wants to be called with no
-/// frame (the follower's [`due`](Follower::due), on the wall clock), as `orch conduct`'s
-/// waker calls the follower between cues.
-struct Filmed<F: FnMut(Option<usize>, u64, &Control) -> Option<u64>> {
-    inner: VirtualClock,
-    frames: Vec<u64>,
-    next: usize,
-    /// When `apply` asked to be called with no frame (wall clock), if it did.
-    wake: Option<u64>,
-    start: Option<u64>,
-    control: Arc<Control>,
-    apply: F,
-}
+/// and wakes the follower between them when it asks, as `orch conduct`'s waker does: the
+/// conductor's tests' clock, the frames its inputs.
+#[path = "../crates/perform/tests/common/conducted.rs"]
+mod conducted;
 
-impl<F: FnMut(Option<usize>, u64, &Control) -> Option<u64>> Filmed<F> {
-    /// Delivers the frames and wakes up to `deadline_us` (a frame before a wake at the same
-    /// time); with `bell`, stops after the first that rings it (after `seen` rings), the clock
-    /// at that call's time: whether one did.
-    fn deliver(&mut self, deadline_us: u64, bell: Option<(&Bell, u64)>) -> bool {
-        if self.start.is_none() {
-            self.start = self.control.time_map().map(|m| m.wall(0).max(0) as u64);
-        }
-        let Some(s) = self.start else {
-            return false;
-        };
-        loop {
-            let frame = self.frames.get(self.next).map(|&t| s + t);
-            let (at, which) = match (frame, self.wake) {
-                (Some(f), Some(w)) if w < f => (w, None),
-                (Some(f), _) => (f, Some(self.next)),
-                (None, Some(w)) => (w, None),
-                (None, None) => break,
-            };
-            if at > deadline_us {
-                break;
-            }
-            self.inner.advance_to(at);
-            if which.is_some() {
-                self.next += 1;
-            }
-            // A wake asked for the present or the past, after a wake: not again.
-            self.wake = (self.apply)(which, at, &self.control)
-                .filter(|&w| w > at || which.is_some())
-                .map(|w| w.max(at));
-            if bell.is_some_and(|(b, seen)| b.rung() > seen) {
-                return true;
-            }
-        }
-        false
-    }
-}
-
-impl<F: FnMut(Option<usize>, u64, &Control) -> Option<u64>> Clock for Filmed<F> {
-    fn now_us(&self) -> u64 {
-        self.inner.now_us()
-    }
-
-    fn wait_until(&mut self, deadline_us: u64) -> u64 {
-        self.deliver(deadline_us, None);
-        self.inner.wait_until(deadline_us)
-    }
-
-    /// The performer wakes at the frame whose beat rings its control (as `orch conduct`'s
-    /// performer wakes when a cue arrives).
-    fn wait_until_rung(&mut self, deadline_us: u64, bell: &Bell, seen: u64) -> bool {
-        if bell.rung() > seen || self.deliver(deadline_us, Some((bell, seen))) {
-            return true;
-        }
-        self.inner.wait_until(deadline_us);
-        false
-    }
-
-    fn lateness(&self) -> Lateness {
-        self.inner.lateness()
-    }
-}
+use conducted::Conducted;
 
 struct Followed {
     /// Per beat found: the true tempo there, the tempo the performance was asked to play
@@ -133,56 +62,48 @@ fn conduct_with_video(video: &Video, follow: Follow) -> Followed {
     // A change asked and not yet seen taking effect: (the ictus, when asked).
     let mut waiting: Option<(u64, u64)> = None;
     let mut start = None;
-    let mut clock = Filmed {
-        inner: VirtualClock::new(),
-        frames,
-        next: 0,
-        wake: None,
-        start: None,
-        control: Arc::clone(&control),
-        apply: |j: Option<usize>, t: u64, c: &Control| {
-            let map = c.time_map().unwrap();
-            let s = *start.get_or_insert(map.wall(0).max(0) as u64);
-            if let Some((ictus, asked)) = waiting {
-                let (anchor, _) = map.anchor();
-                if anchor >= asked as i64 {
-                    out.latency_ms.push((anchor - ictus as i64) as f64 / 1000.0);
-                    waiting = None;
-                }
+    let mut clock = Conducted::new(&control, frames, |t: u64, j: Option<usize>, c: &Control| {
+        let map = c.time_map().unwrap();
+        let s = *start.get_or_insert(map.wall(0).max(0) as u64);
+        if let Some((ictus, asked)) = waiting {
+            let (anchor, _) = map.anchor();
+            if anchor >= asked as i64 {
+                out.latency_ms.push((anchor - ictus as i64) as f64 / 1000.0);
+                waiting = None;
             }
-            let Some(j) = j else {
-                // Woken with no frame: as `orch conduct`'s waker does.
-                follower.wake(t, Some(&map)).apply(c, t);
-                return follower.due();
-            };
-            let (t_ms, frame) = video.frame_at(kept[j]);
-            let Some(b) = baton.push(t_ms, &frame) else {
-                return follower.due();
-            };
-            let ictus = (s as f64 + (b.t_ms * 1000.0 - first_us as f64).round()).max(0.0) as u64;
-            let cue = Timed {
-                t_us: t,
-                cue: Cue::Beat {
-                    t_us: ictus,
-                    bpm: None,
-                },
-            };
-            let (pos, _) = beats.at(map.score(ictus as i64));
-            if let Action::Tempo(tempo) = follower.cue(&cue, Some(&map)) {
-                c.set_tempo(tempo);
-                waiting = Some((ictus, t));
-                let truth = video
-                    .truth
-                    .iter()
-                    .min_by(|x, y| (x.t_ms - b.t_ms).abs().total_cmp(&(y.t_ms - b.t_ms).abs()))
-                    .unwrap()
-                    .bpm;
-                out.beats
-                    .push((truth, tempo.get() * bpm0, (pos - pos.round()).abs()));
-            }
-            follower.due()
-        },
-    };
+        }
+        let Some(j) = j else {
+            // Woken with no frame: as `orch conduct`'s waker does.
+            follower.wake(t, Some(&map)).apply(c, t);
+            return follower.due();
+        };
+        let (t_ms, frame) = video.frame_at(kept[j]);
+        let Some(b) = baton.push(t_ms, &frame) else {
+            return follower.due();
+        };
+        let ictus = (s as f64 + (b.t_ms * 1000.0 - first_us as f64).round()).max(0.0) as u64;
+        let cue = Timed {
+            t_us: t,
+            cue: Cue::Beat {
+                t_us: ictus,
+                bpm: None,
+            },
+        };
+        let (pos, _) = beats.at(map.score(ictus as i64));
+        if let Action::Tempo(tempo) = follower.cue(&cue, Some(&map)) {
+            c.set_tempo(tempo);
+            waiting = Some((ictus, t));
+            let truth = video
+                .truth
+                .iter()
+                .min_by(|x, y| (x.t_ms - b.t_ms).abs().total_cmp(&(y.t_ms - b.t_ms).abs()))
+                .unwrap()
+                .bpm;
+            out.beats
+                .push((truth, tempo.get() * bpm0, (pos - pos.round()).abs()));
+        }
+        follower.due()
+    });
     let mut live = |_: &orch_perform::Live| {};
     let played = perform::<_, MidiRecording>(
         &setup,

@@ -1,7 +1,8 @@
 //! A conductor on the virtual clock: beats at known times, sent as a source's bytes (OSC
 //! packets or MIDI clock) through that source's decoder and the follower to a performance
-//! of the virtual robot; each note's sound against its beat. Shared by the conductor's tests
-//! and the `follow_figures` example (`#[path]`-included there).
+//! of the virtual robot; each note's sound against its beat. Shared by the conductor's tests,
+//! the `follow_figures` example and `orch`'s baton tests (whose video frames are the inputs;
+//! `#[path]`-included there).
 #![allow(dead_code)]
 
 use std::sync::Arc;
