@@ -56,10 +56,12 @@
 //! play a quarter in 0.75 × 600 ms at the fastest, so at the 2nd beat (923 ms) it stands at
 //! 1.72 quarters at most and its note comes 97 ms late at least (here 108); the **3rd** is
 //! reached (0 ms). Slower, 130 → 90 BPM (461.5 ms become 666.7): the 3rd and the 4th beats
-//! cannot be reached by any follower within the rules, whatever its constants. Before
-//! 461.5 ms it cannot tell this from the steady tempo, whose beat there must find its note
-//! within 25 ms; from then until the 1st beat (666.7 ms) a beat may at most stretch to 1.25 of
-//! the conductor's (0.2 ms a ms): the performance stands at least 66 ms short of the old
+//! cannot be reached by any follower within the rules, whatever its constants (a beat's
+//! sixteenth measured against the tempo the follower holds, the old one until two intervals
+//! agree: against the single odd interval it would be taking that interval for the tempo).
+//! Before 461.5 ms it cannot tell this from the steady tempo, whose beat there must find its
+//! note within 25 ms; from then until the 1st beat (666.7 ms) a beat may at most stretch to
+//! 1.25 of the conductor's (0.2 ms a ms): the performance stands at least 66 ms short of the old
 //! tempo's 1.445 quarters there, at 1.301. That beat is one odd interval: the rate stays 130
 //! until the 2nd beat (1333 ms), a quarter lasts 1.25 × 461.5 = 577 ms at the slowest, so the
 //! performance stands at 2.457 quarters at least there (the conductor at 2). At 90 a quarter
@@ -68,6 +70,7 @@
 //! the first that can be reached, and is (0 ms; here 317 and 157 ms early at the 3rd and 4th,
 //! with the constants above). Reaching the 3rd would take the single 1.44-period interval as
 //! the new tempo, or a beat stretched to far past a sixteenth.
+
 use std::collections::VecDeque;
 
 use crate::conduct::{Action, Cue, ScoreBeats, Timed};
