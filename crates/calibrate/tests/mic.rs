@@ -11,7 +11,9 @@ use std::time::{Duration, Instant};
 
 use orch_calibrate::live::{take, TakeError, START_MARGIN, TAIL};
 use orch_calibrate::mic::{Mic, MicError, MicFormat, SampleFormat};
-use orch_calibrate::synthetic::{duty, hidden_robot, record, HiddenKey, Room};
+use orch_calibrate::synthetic::{
+    duty, file_mic_conf, hidden_robot, raw_s32, record, s32, HiddenKey, Room,
+};
 use orch_calibrate::{analyze, Anchor, Score};
 use orch_robot::Robot;
 
@@ -30,15 +32,6 @@ struct Fixture {
     keys: Vec<HiddenKey>,
     /// The recording's samples as the capture reads them back (S32_LE, scaled).
     samples: Vec<f32>,
-}
-
-fn s32(x: f32) -> i32 {
-    (f64::from(x.clamp(-1.0, 1.0)) * 2_147_483_647.0).round() as i32
-}
-
-fn write_raw(path: &PathBuf, samples: &[f32]) {
-    let bytes: Vec<u8> = samples.iter().flat_map(|&x| s32(x).to_le_bytes()).collect();
-    std::fs::write(path, bytes).unwrap();
 }
 
 /// The recording, the raw files and the asoundrc: made once, before any ALSA call.
@@ -62,7 +55,7 @@ fn fixture() -> &'static Fixture {
         // As long as a take records (it asks for the score, the tail and a margin), and more.
         let take_s = f64::from(score.length_ms()) / 1000.0 + (TAIL + START_MARGIN).as_secs_f64();
         samples.resize(((take_s + 1.0) * f64::from(RATE)) as usize, 0.0);
-        write_raw(&dir.join("rec.raw"), &samples);
+        std::fs::write(dir.join("rec.raw"), raw_s32(&samples)).unwrap();
         // A microphone that stops: a FIFO that gets one second of it, then nothing (a file
         // would not do: at its end the plugin goes on giving the last samples read).
         // One for each test that uses it.
@@ -73,13 +66,7 @@ fn fixture() -> &'static Fixture {
                 .unwrap();
             assert!(status.success());
         }
-        let pcm = |name: &str, file: &str| {
-            format!(
-                "pcm.{name} {{\n  type file\n  slave.pcm \"null\"\n  file \"/dev/null\"\n  \
-                 infile \"{}\"\n  format \"raw\"\n}}\n",
-                dir.join(file).display()
-            )
-        };
+        let pcm = |name: &str, file: &str| file_mic_conf(name, &dir.join(file));
         std::fs::write(
             dir.join("alsa/asoundrc"),
             pcm("calmic", "rec.raw")
@@ -113,8 +100,7 @@ fn feed_one_second(f: &Fixture, fifo: &str) -> std::sync::mpsc::Sender<()> {
         use std::io::Write;
         // Opening blocks until the plugin opens its end.
         let mut fifo = std::fs::OpenOptions::new().write(true).open(path).unwrap();
-        let bytes: Vec<u8> = second.iter().flat_map(|&x| s32(x).to_le_bytes()).collect();
-        let _ = fifo.write_all(&bytes);
+        let _ = fifo.write_all(&raw_s32(&second));
         let _ = rx.recv();
     });
     tx
