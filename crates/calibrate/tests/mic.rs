@@ -150,11 +150,20 @@ fn a_microphone_that_stops_is_an_error_not_a_hang() {
     let f = fixture();
     let _feed = feed_one_second(f, "stops1.fifo");
     let t = Instant::now();
-    let e = Mic::open("calstops1")
-        .unwrap()
-        .start(10.0)
-        .unwrap()
-        .finish()
+    // On a thread of its own: a capture that hangs fails the test rather than hanging it.
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(
+            Mic::open("calstops1")
+                .unwrap()
+                .start(10.0)
+                .unwrap()
+                .finish(),
+        );
+    });
+    let e = rx
+        .recv_timeout(Duration::from_secs(10))
+        .expect("the capture hung")
         .unwrap_err();
     match e {
         // About where the sound stopped (a short read from the FIFO still counts whole).
@@ -169,15 +178,16 @@ fn a_failing_microphone_stops_the_performance() {
     let f = fixture();
     let _feed = feed_one_second(f, "stops2.fifo");
     let t = Instant::now();
-    let out = orch_io::OutSpec::parse("sim").unwrap();
-    let e = take(
-        &f.robot,
-        &f.score,
-        out,
-        Mic::open("calstops2").unwrap(),
-        &AtomicBool::new(false),
-    )
-    .unwrap_err();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let out = orch_io::OutSpec::parse("sim").unwrap();
+        let mic = Mic::open("calstops2").unwrap();
+        let _ = tx.send(take(&f.robot, &f.score, out, mic, &AtomicBool::new(false)));
+    });
+    let e = rx
+        .recv_timeout(Duration::from_secs(30))
+        .expect("the take hung")
+        .unwrap_err();
     assert!(
         matches!(e, TakeError::Mic(MicError::Stalled { .. })),
         "{e:?}"
@@ -208,6 +218,13 @@ fn a_take_on_the_virtual_robot_recovers_the_hidden_delays() {
     // The stream started just before the performance: a few ms cut off the front.
     assert!((0.0..200.0).contains(&t.lead_ms), "{}", t.lead_ms);
     assert_eq!(t.played.records.len(), f.score.schedule().len());
+    // Lined up: the take begins where the score's time 0 fell in the stream.
+    let cut = (t.lead_ms * f64::from(RATE) / 1000.0).round() as usize;
+    assert!(
+        t.recording.samples[..1000] == f.samples[cut..cut + 1000],
+        "the take does not begin {} ms into the stream",
+        t.lead_ms
+    );
     let anchor = Anchor {
         note: 60,
         press_delay_ms: f.keys[0].press_delay_ms,
