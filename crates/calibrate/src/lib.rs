@@ -67,13 +67,13 @@
 //! (`cargo run --release -p orch-calibrate --example accuracy`) use it.
 //!
 //! # Recording live
-//! With the `mic` feature, [`mic`] records from an ALSA capture device and [`live`] plays the
-//! score on the robot through orch-stage's live session while recording it, the recording
-//! lined up with the performance (`orch calibrate --out OUT --mic DEVICE`).
+//! With the `mic` feature, the `mic` module records from an ALSA capture device and `live`
+//! plays the score on the robot through orch-stage's live session while recording it, the
+//! recording lined up with the performance (`orch calibrate --out OUT --mic DEVICE`).
 //!
 //! ## Cargo features
 //!
-//! - `mic` (off by default): [`mic`] and [`live`], the live capture. It links alsa-lib
+//! - `mic` (off by default): the `mic` and `live` modules, the live capture. It links alsa-lib
 //!   (`libasound2-dev` to build) through the `alsa` crate, and brings orch-stage (the live
 //!   session) in. Without it the crate reads recordings from WAV files only.
 
