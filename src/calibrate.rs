@@ -161,6 +161,10 @@ mod live {
     use crate::error::bad_input;
     use crate::robot::Robot;
 
+    /// A sound card clock this far off the host's (ppm) is worth a warning: 2.5 ms of drift
+    /// over a 61-key, 4-level take (the measurement is good to a few ppm over minutes).
+    const CLOCK_PPM: f64 = 10.0;
+
     pub fn record(
         args: &CalibrateArgs,
         device: &str,
@@ -209,6 +213,13 @@ mod live {
             eprintln!(
                 "orch: warning: a message went out {late_ms:.1} ms late: the delays measured \
                  may be off by as much"
+            );
+        }
+        if let Some(ppm) = take.clock_ppm.filter(|p| p.abs() >= CLOCK_PPM) {
+            eprintln!(
+                "orch: warning: the sound card's clock runs {ppm:+.0} ppm off the host's: the \
+                 take's timing drifts {:.1} ms by its end (not corrected)",
+                ppm.abs() * 1e-6 * f64::from(score.length_ms())
             );
         }
         if let Some(path) = &args.keep {

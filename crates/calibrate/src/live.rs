@@ -48,6 +48,9 @@ pub struct Take {
     pub format: MicFormat,
     /// How long the stream ran before the score's time 0 (cut off), ms.
     pub lead_ms: f64,
+    /// How far the sound card's clock ran from the host's, ppm (see
+    /// [`Captured::clock_ppm`](crate::mic::Captured::clock_ppm)).
+    pub clock_ppm: Option<f64>,
     /// The robot's performance (its report: notes sent, lateness).
     pub played: Played,
     /// Whether the OS refused real-time priority to the sender.
@@ -195,6 +198,7 @@ pub fn take(
         recording,
         format,
         lead_ms: lead.as_secs_f64() * 1000.0,
+        clock_ppm: captured.clock_ppm,
         played: ended.played,
         priority_refused: finished.priority_refused,
     })

@@ -362,7 +362,7 @@ impl Mic {
         stop: &AtomicBool,
         progress: &AtomicUsize,
         started: mpsc::Sender<Instant>,
-    ) -> Result<Vec<f32>, MicError> {
+    ) -> Result<Recorded, MicError> {
         let rate = f64::from(self.format.rate);
         let frame_bytes = self.format.frame_bytes();
         let mut samples: Vec<f32> = Vec::with_capacity(frames);
@@ -405,8 +405,15 @@ impl Mic {
                 Err(e) => return Err(failed(samples.len(), &e)),
             }
         }
+        // Frames captured by now: those read, and those still in the buffer.
+        let waiting = self.pcm.delay().unwrap_or(0).max(0) as usize;
+        let ended = Instant::now();
         let _ = self.pcm.drop();
-        Ok(samples)
+        Ok(Recorded {
+            captured_by_end: samples.len() + waiting,
+            ended,
+            samples,
+        })
     }
 }
 
@@ -498,7 +505,7 @@ pub struct Capturing {
     progress: Arc<AtomicUsize>,
     /// The count last seen, and when it last changed.
     seen: Mutex<(usize, Instant)>,
-    thread: JoinHandle<Result<Vec<f32>, MicError>>,
+    thread: JoinHandle<Result<Recorded, MicError>>,
 }
 
 /// How often [`Capturing::finish`] looks at the thread.
@@ -557,16 +564,41 @@ impl Capturing {
             }
             std::thread::sleep(WATCH);
         }
-        let samples = self
+        let r = self
             .thread
             .join()
             .unwrap_or_else(|p| std::panic::resume_unwind(p))?;
+        let rate = self.format.rate;
         Ok(Captured {
             started: self.started,
             format: self.format,
-            recording: Recording::from_samples(self.format.rate, samples),
+            clock_ppm: clock_ppm(r.captured_by_end, rate, r.ended - self.started),
+            recording: Recording::from_samples(rate, r.samples),
         })
     }
+}
+
+/// What the capture thread gives.
+#[derive(Debug)]
+struct Recorded {
+    samples: Vec<f32>,
+    /// Frames the device had captured when the recording ended (read or not).
+    captured_by_end: usize,
+    /// When it ended.
+    ended: Instant,
+}
+
+/// How far the device's sample clock runs from the host's, parts per million (positive: fast),
+/// from `frames` captured in `wall` at a nominal `rate`; `None` when the stream did not run in
+/// real time for at least 10 s (too short to tell, or not a sound card: a file played as a
+/// microphone goes as fast as it is read), told by a rate more than 1 % off.
+pub fn clock_ppm(frames: usize, rate: u32, wall: Duration) -> Option<f64> {
+    let s = wall.as_secs_f64();
+    if s < 10.0 || rate == 0 {
+        return None;
+    }
+    let ratio = frames as f64 / f64::from(rate) / s;
+    ((ratio - 1.0).abs() <= 0.01).then_some((ratio - 1.0) * 1e6)
 }
 
 /// A finished recording.
@@ -578,6 +610,10 @@ pub struct Captured {
     pub format: MicFormat,
     /// The first channel, mono.
     pub recording: Recording,
+    /// How far the device's clock ran from the host's over the recording, ppm ([`clock_ppm`]):
+    /// not corrected (the analysis takes the nominal rate), so a take's timing drifts by this
+    /// much (20 ppm: 5 ms over a 4-minute take).
+    pub clock_ppm: Option<f64>,
 }
 
 #[cfg(test)]
@@ -637,6 +673,27 @@ mod tests {
             .first_channel(&[0x00, 0x00, 0x40, 0xFF, 0xFF])
             .collect();
         assert_eq!(v, [0.5], "a partial frame at the end is left out");
+    }
+
+    #[test]
+    fn the_clock_is_measured_on_real_time_streams_only() {
+        let s = |secs: f64| Duration::from_secs_f64(secs);
+        // 48 000 Hz running 20 ppm fast for 100 s.
+        let ppm = clock_ppm(4_800_096, 48_000, s(100.0)).unwrap();
+        assert!((ppm - 20.0).abs() < 1e-6, "{ppm}");
+        let ppm = clock_ppm(4_799_904, 48_000, s(100.0)).unwrap();
+        assert!((ppm + 20.0).abs() < 1e-6, "{ppm}");
+        assert_eq!(clock_ppm(480_000, 48_000, s(9.9)), None, "too short");
+        assert_eq!(
+            clock_ppm(4_800_000, 48_000, s(0.5)),
+            None,
+            "a file, read at once"
+        );
+        assert_eq!(
+            clock_ppm(48_000 * 200, 48_000, s(100.0)),
+            None,
+            "not real time"
+        );
     }
 
     #[test]
