@@ -161,10 +161,6 @@ mod live {
     use crate::error::bad_input;
     use crate::robot::Robot;
 
-    /// A sound card clock this far off the host's (ppm) is worth a warning: 2.5 ms of drift
-    /// over a 61-key, 4-level take (the measurement is good to a few ppm over minutes).
-    const CLOCK_PPM: f64 = 10.0;
-
     pub fn record(
         args: &CalibrateArgs,
         device: &str,
@@ -173,6 +169,15 @@ mod live {
     ) -> anyhow::Result<Recording> {
         let out = args.out.as_deref().expect("clap requires --out with --mic");
         let out = orch_io::OutSpec::parse(out).map_err(|e| bad_input(e.to_string()))?;
+        // Created before the take, so that a path that cannot be written does not lose it.
+        let keep = match &args.keep {
+            Some(path) => Some((
+                path,
+                std::fs::File::create(path)
+                    .map_err(|e| bad_input(format!("--keep {}: {e}", path.display())))?,
+            )),
+            None => None,
+        };
         let mic = Mic::open(device).map_err(|e| bad_input(e.to_string()))?;
         // SIGINT, SIGTERM and SIGHUP stop the robot (every key released) and the recording.
         let stop = Arc::new(AtomicBool::new(false));
@@ -196,35 +201,10 @@ mod live {
             TakeError::Output(m) => bad_input(m),
             e => anyhow::Error::new(e),
         })?;
-        if take.priority_refused {
-            eprintln!(
-                "orch: note: the OS refused real-time priority to the sender; under load its \
-                 messages may be late, and the delays measured with them"
-            );
+        for w in take.warnings() {
+            eprintln!("orch: warning: {w}");
         }
-        let late_ms = take
-            .played
-            .lateness_us
-            .iter()
-            .flatten()
-            .max()
-            .map_or(0.0, |&us| us as f64 / 1000.0);
-        if late_ms > 1.0 {
-            eprintln!(
-                "orch: warning: a message went out {late_ms:.1} ms late: the delays measured \
-                 may be off by as much"
-            );
-        }
-        if let Some(ppm) = take.clock_ppm.filter(|p| p.abs() >= CLOCK_PPM) {
-            eprintln!(
-                "orch: warning: the sound card's clock runs {ppm:+.0} ppm off the host's: the \
-                 take's timing drifts {:.1} ms by its end (not corrected)",
-                ppm.abs() * 1e-6 * f64::from(score.length_ms())
-            );
-        }
-        if let Some(path) = &args.keep {
-            let file = std::fs::File::create(path)
-                .map_err(|e| bad_input(format!("--keep {}: {e}", path.display())))?;
+        if let Some((path, file)) = keep {
             take.recording
                 .write(std::io::BufWriter::new(file))
                 .with_context(|| format!("--keep {}", path.display()))?;

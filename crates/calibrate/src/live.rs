@@ -57,6 +57,49 @@ pub struct Take {
     pub priority_refused: bool,
 }
 
+/// A sound card clock this far off the host's (ppm) is worth a warning: 2.5 ms of drift over
+/// a 61-key, 4-level take (the measurement is good to a few ppm over minutes).
+pub const CLOCK_WARN_PPM: f64 = 10.0;
+/// A message sent this late (ms) is worth a warning: the delays measured may be off by it.
+pub const LATE_WARN_MS: f64 = 1.0;
+
+impl Take {
+    /// What may have spoiled the take's timing, in words: the OS refused the sender real-time
+    /// priority, a message went out more than [`LATE_WARN_MS`] late, the sound card's clock
+    /// ran [`CLOCK_WARN_PPM`] or more off the host's.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        if self.priority_refused {
+            w.push(
+                "the OS refused real-time priority to the sender: under load its messages may \
+                 be late, and the delays measured with them"
+                    .to_string(),
+            );
+        }
+        let late_ms = self
+            .played
+            .lateness_us
+            .iter()
+            .flatten()
+            .max()
+            .map_or(0.0, |&us| us as f64 / 1000.0);
+        if late_ms > LATE_WARN_MS {
+            w.push(format!(
+                "a message went out {late_ms:.1} ms late: the delays measured may be off by as \
+                 much"
+            ));
+        }
+        if let Some(ppm) = self.clock_ppm.filter(|p| p.abs() >= CLOCK_WARN_PPM) {
+            w.push(format!(
+                "the sound card's clock runs {ppm:+.0} ppm off the host's: the take's timing \
+                 drifts {:.1} ms by its end (not corrected)",
+                ppm.abs() * 1e-6 * self.recording.seconds() * 1000.0
+            ));
+        }
+        w
+    }
+}
+
 /// Why a take failed.
 #[derive(Debug)]
 pub enum TakeError {

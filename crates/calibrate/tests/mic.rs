@@ -206,7 +206,7 @@ fn a_failing_microphone_stops_the_performance() {
 fn a_take_on_the_virtual_robot_recovers_the_hidden_delays() {
     let f = fixture();
     let out = orch_io::OutSpec::parse("sim").unwrap();
-    let t = take(
+    let mut t = take(
         &f.robot,
         &f.score,
         out,
@@ -250,4 +250,17 @@ fn a_take_on_the_virtual_robot_recovers_the_hidden_delays() {
             k.note
         );
     }
+    // What would spoil a take's timing is said: a late message, a sound card's clock off.
+    t.priority_refused = false;
+    t.played.lateness_us = Some(vec![300, 2_500, 40]);
+    t.clock_ppm = Some(5.0);
+    assert_eq!(
+        t.warnings(),
+        ["a message went out 2.5 ms late: the delays measured may be off by as much"]
+    );
+    t.played.lateness_us = Some(vec![300]);
+    t.clock_ppm = Some(-25.0);
+    let w = t.warnings();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].contains("runs -25 ppm off the host's"), "{w:?}");
 }
