@@ -177,6 +177,12 @@ pub fn take(
     mic: Mic,
     stop: &AtomicBool,
 ) -> Result<Take, TakeError> {
+    if !out.channels.contains(0) {
+        return Err(TakeError::Output(format!(
+            "--out {}: the calibration score is on channel 1, which this output does not take",
+            out.text
+        )));
+    }
     let song = Song::parse(&score.to_smf()).map_err(|e| TakeError::Internal(e.to_string()))?;
     let out_text = out.text.clone();
     let lanes = open_lanes(vec![out], &setup(robot)).map_err(|e| match e {

@@ -203,6 +203,22 @@ fn a_failing_microphone_stops_the_performance() {
 }
 
 #[test]
+fn an_output_without_channel_1_is_refused_before_anything_plays() {
+    let f = fixture();
+    let out = orch_io::OutSpec::parse("sim:ch=2-16").unwrap();
+    let e = take(
+        &f.robot,
+        &f.score,
+        out,
+        Mic::open("calmic").unwrap(),
+        &AtomicBool::new(false),
+    )
+    .unwrap_err();
+    assert!(e.is_bad_input(), "{e:?}");
+    assert!(e.to_string().contains("channel 1"), "{e}");
+}
+
+#[test]
 fn a_take_on_the_virtual_robot_recovers_the_hidden_delays() {
     let f = fixture();
     let out = orch_io::OutSpec::parse("sim").unwrap();
