@@ -194,6 +194,48 @@ mod mic {
     }
 
     #[test]
+    fn sigterm_stops_the_take_with_every_key_released() {
+        let d = dir("sigterm");
+        let (_, samples) = recording();
+        std::fs::write(d.join("rec.raw"), raw_s32(&samples)).unwrap();
+        std::fs::write(
+            d.join("alsa/asoundrc"),
+            file_mic_conf("calmic", &d.join("rec.raw")),
+        )
+        .unwrap();
+        let raw = d.join("raw.bin");
+        std::fs::write(&raw, b"").unwrap();
+        let mut cmd = orch();
+        cmd.args(["calibrate", "--mic", "calmic", "--levels", "2", "--out"])
+            .arg(format!("rawmidi:{}", raw.display()))
+            .arg("--robot")
+            .arg(d.join("robot.toml"))
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped());
+        with_mic(&mut cmd, &d);
+        let child = cmd.spawn().unwrap();
+        // The sync figure's first strike (1 s in) has gone out.
+        let t = Instant::now();
+        while !std::fs::read(&raw).unwrap().contains(&0x90) {
+            assert!(t.elapsed() < Duration::from_secs(10), "nothing played");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        nix::sys::signal::kill(
+            nix::unistd::Pid::from_raw(child.id() as i32),
+            nix::sys::signal::Signal::SIGTERM,
+        )
+        .unwrap();
+        let out = child.wait_with_output().unwrap();
+        assert_eq!(out.status.code(), Some(1));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("stopped before the end of the score"), "{err}");
+        assert!(t.elapsed() < Duration::from_secs(5), "{:?}", t.elapsed());
+        let bytes = std::fs::read(&raw).unwrap();
+        let all_notes_off: Vec<u8> = (0..16u8).flat_map(|c| [0xB0 | c, 123, 0]).collect();
+        assert!(bytes.ends_with(&all_notes_off), "{bytes:02x?}");
+    }
+
+    #[test]
     fn a_microphone_that_stops_stops_the_robot_with_every_key_released() {
         let d = dir("stops");
         let (_, samples) = recording();
