@@ -97,16 +97,26 @@ mod mic {
         cmd.env("XDG_CONFIG_HOME", d);
     }
 
-    #[test]
-    fn calibrate_mic_plays_records_and_prints_the_measurements() {
-        let d = dir("take");
-        let (keys, samples) = recording();
-        std::fs::write(d.join("rec.raw"), raw_s32(&samples)).unwrap();
+    /// `calmic` in `d`'s asoundrc: a microphone that plays `samples`.
+    fn mic_playing(d: &Path, samples: &[f32]) {
+        std::fs::write(d.join("rec.raw"), raw_s32(samples)).unwrap();
         std::fs::write(
             d.join("alsa/asoundrc"),
             file_mic_conf("calmic", &d.join("rec.raw")),
         )
         .unwrap();
+    }
+
+    /// What an output sends last when it lets go of every key.
+    fn all_notes_off() -> Vec<u8> {
+        (0..16u8).flat_map(|c| [0xB0 | c, 123, 0]).collect()
+    }
+
+    #[test]
+    fn calibrate_mic_plays_records_and_prints_the_measurements() {
+        let d = dir("take");
+        let (keys, samples) = recording();
+        mic_playing(&d, &samples);
         let anchor = format!("60={:.3}", keys[0].press_delay_ms);
         let mut cmd = orch();
         cmd.args([
@@ -148,27 +158,23 @@ mod mic {
             assert!((got - want).abs() <= 1.0, "note {note}: {got} vs {want}");
         }
         // The kept take analyses to the same figures, and as a robot.toml that loads.
-        let again = orch()
-            .args(["calibrate", "--levels", "2", "--json", "--anchor", &anchor])
-            .arg("--robot")
-            .arg(d.join("robot.toml"))
-            .arg("--wav")
-            .arg(d.join("kept.wav"))
-            .output()
-            .unwrap();
-        assert!(again.status.success());
-        let again: Value = serde_json::from_slice(&again.stdout).unwrap();
+        let kept = |json: bool| {
+            let out = orch()
+                .args(["calibrate", "--levels", "2", "--anchor", &anchor])
+                .args(json.then_some("--json"))
+                .arg("--robot")
+                .arg(d.join("robot.toml"))
+                .arg("--wav")
+                .arg(d.join("kept.wav"))
+                .output()
+                .unwrap();
+            assert!(out.status.success());
+            out.stdout
+        };
+        let again: Value = serde_json::from_slice(&kept(true)).unwrap();
         assert_eq!(again["keys"], json["keys"]);
-        let toml = orch()
-            .args(["calibrate", "--levels", "2", "--anchor", &anchor])
-            .arg("--robot")
-            .arg(d.join("robot.toml"))
-            .arg("--wav")
-            .arg(d.join("kept.wav"))
-            .output()
-            .unwrap();
-        assert!(toml.status.success());
-        orch_robot::Robot::from_toml(&String::from_utf8(toml.stdout).unwrap()).unwrap();
+        let toml = kept(false);
+        orch_robot::Robot::from_toml(&String::from_utf8(toml).unwrap()).unwrap();
     }
 
     #[test]
@@ -197,12 +203,7 @@ mod mic {
     fn sigterm_stops_the_take_with_every_key_released() {
         let d = dir("sigterm");
         let (_, samples) = recording();
-        std::fs::write(d.join("rec.raw"), raw_s32(&samples)).unwrap();
-        std::fs::write(
-            d.join("alsa/asoundrc"),
-            file_mic_conf("calmic", &d.join("rec.raw")),
-        )
-        .unwrap();
+        mic_playing(&d, &samples);
         let raw = d.join("raw.bin");
         std::fs::write(&raw, b"").unwrap();
         let mut cmd = orch();
@@ -231,8 +232,7 @@ mod mic {
         assert!(err.contains("stopped before the end of the score"), "{err}");
         assert!(t.elapsed() < Duration::from_secs(5), "{:?}", t.elapsed());
         let bytes = std::fs::read(&raw).unwrap();
-        let all_notes_off: Vec<u8> = (0..16u8).flat_map(|c| [0xB0 | c, 123, 0]).collect();
-        assert!(bytes.ends_with(&all_notes_off), "{bytes:02x?}");
+        assert!(bytes.ends_with(&all_notes_off()), "{bytes:02x?}");
     }
 
     #[test]
@@ -279,8 +279,7 @@ mod mic {
         // Stopped at the stall, long before the score's 16 s.
         assert!(t.elapsed() < Duration::from_secs(8), "{:?}", t.elapsed());
         let bytes = std::fs::read(&raw).unwrap();
-        let all_notes_off: Vec<u8> = (0..16u8).flat_map(|c| [0xB0 | c, 123, 0]).collect();
         assert!(bytes.contains(&0x90), "no note was played: {bytes:02x?}");
-        assert!(bytes.ends_with(&all_notes_off), "{bytes:02x?}");
+        assert!(bytes.ends_with(&all_notes_off()), "{bytes:02x?}");
     }
 }

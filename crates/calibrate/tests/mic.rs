@@ -106,6 +106,17 @@ fn feed_one_second(f: &Fixture, fifo: &str) -> std::sync::mpsc::Sender<()> {
     tx
 }
 
+/// `f()` on a thread of its own, given `limit`: one that hangs fails the test rather than
+/// hanging it.
+fn within<T: Send + 'static>(limit: Duration, f: impl FnOnce() -> T + Send + 'static) -> T {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(f());
+    });
+    rx.recv_timeout(limit)
+        .unwrap_or_else(|_| panic!("still running after {limit:?}: hung"))
+}
+
 #[test]
 fn the_microphone_delivers_the_recording_sample_for_sample() {
     let f = fixture();
@@ -150,21 +161,14 @@ fn a_microphone_that_stops_is_an_error_not_a_hang() {
     let f = fixture();
     let _feed = feed_one_second(f, "stops1.fifo");
     let t = Instant::now();
-    // On a thread of its own: a capture that hangs fails the test rather than hanging it.
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let _ = tx.send(
-            Mic::open("calstops1")
-                .unwrap()
-                .start(10.0)
-                .unwrap()
-                .finish(),
-        );
-    });
-    let e = rx
-        .recv_timeout(Duration::from_secs(10))
-        .expect("the capture hung")
-        .unwrap_err();
+    let e = within(Duration::from_secs(10), || {
+        Mic::open("calstops1")
+            .unwrap()
+            .start(10.0)
+            .unwrap()
+            .finish()
+    })
+    .unwrap_err();
     match e {
         // About where the sound stopped (a short read from the FIFO still counts whole).
         MicError::Stalled { at_s, .. } => assert!((0.95..1.5).contains(&at_s), "{at_s}"),
@@ -178,16 +182,12 @@ fn a_failing_microphone_stops_the_performance() {
     let f = fixture();
     let _feed = feed_one_second(f, "stops2.fifo");
     let t = Instant::now();
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
+    let e = within(Duration::from_secs(30), || {
         let out = orch_io::OutSpec::parse("sim").unwrap();
         let mic = Mic::open("calstops2").unwrap();
-        let _ = tx.send(take(&f.robot, &f.score, out, mic, &AtomicBool::new(false)));
-    });
-    let e = rx
-        .recv_timeout(Duration::from_secs(30))
-        .expect("the take hung")
-        .unwrap_err();
+        take(&f.robot, &f.score, out, mic, &AtomicBool::new(false))
+    })
+    .unwrap_err();
     assert!(
         matches!(e, TakeError::Mic(MicError::Stalled { .. })),
         "{e:?}"
