@@ -3,7 +3,8 @@
 //!
 //! - **The device** ([`Mic::open`]): any ALSA PCM name: `default`, `hw:1,0`, `plughw:CARD=Mic`,
 //!   or a definition of one's own in `~/.asoundrc` (`arecord -L` lists most). It is opened
-//!   non-blocking: no read ever waits on a device that has stopped.
+//!   non-blocking, so a read does not wait on a device that has stopped (and one that waits
+//!   all the same, inside a plugin, is caught by the stall watch below).
 //! - **The format** (negotiated at open, [`MicFormat`]): interleaved, the first sample format the
 //!   device takes of 32-bit, 24-bit packed (3 bytes) and 16-bit signed integer and 32-bit
 //!   float, all little-endian; 48 kHz, else 44.1 kHz, else the device's rate nearest 48 kHz
