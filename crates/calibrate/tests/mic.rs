@@ -71,7 +71,12 @@ fn fixture() -> &'static Fixture {
             dir.join("alsa/asoundrc"),
             pcm("calmic", "rec.raw")
                 + &pcm("calstops1", "stops1.fifo")
-                + &pcm("calstops2", "stops2.fifo"),
+                + &pcm("calstops2", "stops2.fifo")
+                // Devices of one rate: the file behind ALSA's `plug` with its slave's rate
+                // fixed (with resampling off, as the capture asks, the plug keeps it).
+                + &pcm("calfile", "rec.raw")
+                + "pcm.calmic44 { type plug; slave { pcm \"calfile\"; rate 44100 } }\n"
+                + "pcm.calmic8k { type plug; slave { pcm \"calfile\"; rate 8000 } }\n",
         )
         .unwrap();
         // Before the first ALSA call of the process (alsa-lib reads its configuration once),
@@ -140,6 +145,35 @@ fn the_microphone_delivers_the_recording_sample_for_sample() {
     );
     // Not silence: the sync figure's first strike is in the first 3 s.
     assert!(captured.recording.samples.iter().any(|x| x.abs() > 0.01));
+}
+
+#[test]
+fn a_device_without_48_khz_is_recorded_at_44_1_khz_not_resampled() {
+    let f = fixture();
+    let mic = Mic::open("calmic44").unwrap();
+    assert_eq!(
+        mic.format(),
+        MicFormat {
+            format: SampleFormat::S32,
+            rate: 44_100,
+            channels: 1
+        }
+    );
+    let captured = mic.start(1.0).unwrap().finish().unwrap();
+    assert_eq!(captured.recording.rate, 44_100);
+    assert!(
+        captured.recording.samples == f.samples[..44_100],
+        "resampled, or not the file's samples"
+    );
+}
+
+#[test]
+fn a_device_whose_rates_are_too_low_is_refused_naming_its_rate() {
+    fixture();
+    let e = Mic::open("calmic8k").unwrap_err();
+    assert!(matches!(e, MicError::Format { .. }), "{e:?}");
+    assert!(e.is_bad_input());
+    assert!(e.to_string().contains("8000 Hz"), "{e}");
 }
 
 #[test]
