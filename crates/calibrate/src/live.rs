@@ -13,10 +13,12 @@
 //! 3. whichever fails first stops the other: a recording that fails (an overrun, a device
 //!    that stops or goes away) stops the performance, whose output releases every key on the
 //!    way out; an output that fails stops the recording; so does the `stop` flag (a signal);
-//! 4. the recording is lined up with the performance: what was recorded before the score's
-//!    time 0 (the session's start, on the same clock as the stream's) is cut off, so the
-//!    recording's first sample is the score's time 0 and the analysis's capture offset is the
-//!    latency of the chain (output, robot, air, microphone, capture).
+//! 4. the recording is lined up with the performance: put on the host's timeline if the sound
+//!    card's clock ran off it ([`stretch`], by the drift measured over the take,
+//!    [`clock_ppm`](crate::mic::clock_ppm)), then what was recorded before the score's time 0
+//!    (the session's start, on the same clock as the stream's) is cut off, so the recording's
+//!    first sample is the score's time 0 and the analysis's capture offset is the latency of
+//!    the chain (output, robot, air, microphone, capture).
 
 use std::fmt;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -28,7 +30,7 @@ use orch_perform::{Control, Link, Played, Setup, Tempo};
 use orch_seq::Song;
 use orch_stage::session::{open_lanes, Session, SessionFailure};
 
-use crate::mic::{Mic, MicError, MicFormat};
+use crate::mic::{stretch, Mic, MicError, MicFormat};
 use crate::{Recording, Score};
 
 /// Recorded after the score's end (its last strike's ring-down is in the score already): the
@@ -49,7 +51,8 @@ pub struct Take {
     /// How long the stream ran before the score's time 0 (cut off), ms.
     pub lead_ms: f64,
     /// How far the sound card's clock ran from the host's, ppm (see
-    /// [`Captured::clock_ppm`](crate::mic::Captured::clock_ppm)).
+    /// [`Captured::clock_ppm`](crate::mic::Captured::clock_ppm)); the recording is corrected
+    /// for it.
     pub clock_ppm: Option<f64>,
     /// The robot's performance (its report: notes sent, lateness).
     pub played: Played,
@@ -58,7 +61,7 @@ pub struct Take {
 }
 
 /// A sound card clock this far off the host's (ppm) is worth a warning: 2.5 ms of drift over
-/// a 61-key, 4-level take (the measurement is good to a few ppm over minutes).
+/// a 61-key, 4-level take, corrected by a measurement good to a few ppm over minutes.
 pub const CLOCK_WARN_PPM: f64 = 10.0;
 /// A message sent this late (ms) is worth a warning: the delays measured may be off by it.
 pub const LATE_WARN_MS: f64 = 1.0;
@@ -66,7 +69,8 @@ pub const LATE_WARN_MS: f64 = 1.0;
 impl Take {
     /// What may have spoiled the take's timing, in words: the OS refused the sender real-time
     /// priority, a message went out more than [`LATE_WARN_MS`] late, the sound card's clock
-    /// ran [`CLOCK_WARN_PPM`] or more off the host's.
+    /// ran [`CLOCK_WARN_PPM`] or more off the host's (corrected, but a measurement good to a
+    /// few ppm).
     pub fn warnings(&self) -> Vec<String> {
         let mut w = Vec::new();
         if self.priority_refused {
@@ -91,8 +95,8 @@ impl Take {
         }
         if let Some(ppm) = self.clock_ppm.filter(|p| p.abs() >= CLOCK_WARN_PPM) {
             w.push(format!(
-                "the sound card's clock runs {ppm:+.0} ppm off the host's: the take's timing \
-                 drifts {:.1} ms by its end (not corrected)",
+                "the sound card's clock runs {ppm:+.0} ppm off the host's ({:.1} ms over the \
+                 take): corrected, to within the measurement's few ppm",
                 ppm.abs() * 1e-6 * self.recording.seconds() * 1000.0
             ));
         }
@@ -241,7 +245,11 @@ pub fn take(
     let lead = score_zero.saturating_duration_since(captured.started);
     let rate = captured.recording.rate;
     let cut = (lead.as_secs_f64() * f64::from(rate)).round() as usize;
-    let samples = captured.recording.samples;
+    let mut samples = captured.recording.samples;
+    if let Some(ppm) = captured.clock_ppm {
+        // On the host's timeline, which the performance kept.
+        samples = stretch(&samples, 1.0 + ppm * 1e-6);
+    }
     let recording = Recording::from_samples(rate, samples[cut.min(samples.len())..].to_vec());
     Ok(Take {
         recording,

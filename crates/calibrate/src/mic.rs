@@ -13,7 +13,9 @@
 //! - **The recording** ([`Mic::start`]): a thread reads a set number of frames, a period at a
 //!   time, into memory. [`Capturing::started`] is when the stream started (taken around
 //!   `snd_pcm_start`, on the same monotonic clock as [`Instant`]): the recording's first
-//!   sample, to line it up with a performance started after it.
+//!   sample, to line it up with a performance started after it. The device's clock is
+//!   measured against that one over the recording ([`clock_ppm`]), for [`stretch`] to put the
+//!   recording back on the host's timeline.
 //! - **Errors** ([`MicError`]): a device that does not exist, is busy, or takes none of the
 //!   formats; while recording, an overrun (samples lost: the timing after it would be wrong,
 //!   so the recording is refused rather than patched), a device that delivers nothing for
@@ -602,6 +604,56 @@ pub fn clock_ppm(frames: usize, rate: u32, wall: Duration) -> Option<f64> {
     ((ratio - 1.0).abs() <= 0.01).then_some((ratio - 1.0) * 1e6)
 }
 
+/// Lobes of the interpolation kernel on each side ([`stretch`]).
+const LOBES: usize = 16;
+/// Fractional positions tabulated ([`stretch`]): a position is rounded to 1/4096 of a sample
+/// (at 48 kHz, 5 ns).
+const PHASES: usize = 4096;
+
+/// A recording made by a clock that ran `ratio` times its nominal rate (1 + ppm × 10⁻⁶),
+/// put back on the nominal timeline: `y[n] = x(n · ratio)`, band-limited interpolation
+/// (a Lanczos kernel of 16 lobes each side, each phase's weights summing to 1). Sample `n` is
+/// then `n / rate` after the first on the host's clock.
+pub fn stretch(x: &[f32], ratio: f64) -> Vec<f32> {
+    let sinc = |v: f64| {
+        if v == 0.0 {
+            1.0
+        } else {
+            let p = std::f64::consts::PI * v;
+            p.sin() / p
+        }
+    };
+    let table: Vec<[f32; 2 * LOBES]> = (0..PHASES)
+        .map(|p| {
+            let frac = p as f64 / PHASES as f64;
+            let mut w = [0.0f64; 2 * LOBES];
+            for (j, wj) in w.iter_mut().enumerate() {
+                // Tap j is sample i0 + j + 1 - LOBES, at distance d from the position.
+                let d = frac - (j as f64 + 1.0 - LOBES as f64);
+                *wj = sinc(d) * sinc(d / LOBES as f64);
+            }
+            let sum: f64 = w.iter().sum();
+            w.map(|v| (v / sum) as f32)
+        })
+        .collect();
+    let out = (x.len() as f64 / ratio).floor() as usize;
+    (0..out)
+        .map(|n| {
+            let t = n as f64 * ratio;
+            let mut i0 = t.floor() as usize;
+            let mut p = ((t - i0 as f64) * PHASES as f64).round() as usize;
+            if p == PHASES {
+                (i0, p) = (i0 + 1, 0);
+            }
+            let w = &table[p];
+            let first = (i0 + 1).saturating_sub(LOBES);
+            (first..(i0 + 1 + LOBES).min(x.len()))
+                .map(|k| x[k] * w[k + LOBES - 1 - i0])
+                .sum()
+        })
+        .collect()
+}
+
 /// A finished recording.
 #[derive(Clone, Debug)]
 pub struct Captured {
@@ -612,8 +664,8 @@ pub struct Captured {
     /// The first channel, mono.
     pub recording: Recording,
     /// How far the device's clock ran from the host's over the recording, ppm ([`clock_ppm`]):
-    /// not corrected (the analysis takes the nominal rate), so a take's timing drifts by this
-    /// much (20 ppm: 5 ms over a 4-minute take).
+    /// a take's timing drifts by this much (20 ppm: 5 ms over a 4-minute take) unless it is
+    /// [`stretch`]ed back.
     pub clock_ppm: Option<f64>,
 }
 
@@ -695,6 +747,38 @@ mod tests {
             None,
             "not real time"
         );
+    }
+
+    #[test]
+    fn a_fast_clock_is_stretched_back_onto_the_nominal_timeline() {
+        let rate = 48_000.0;
+        // A card 100 ppm fast: 2 s of 3 kHz and 7 kHz tones (the partials the analysis
+        // listens to), sampled at its own, faster, instants.
+        let r = 1.0001;
+        let tone = |t: f64| {
+            (2.0 * std::f64::consts::PI * 3000.0 * t).sin() * 0.5
+                + (2.0 * std::f64::consts::PI * 7000.0 * t + 1.0).sin() * 0.3
+        };
+        let x: Vec<f32> = (0..96_000)
+            .map(|k| tone(k as f64 / (rate * r)) as f32)
+            .collect();
+        let y = stretch(&x, r);
+        assert_eq!(y.len(), (96_000.0 / r) as usize);
+        let worst = (LOBES..y.len() - LOBES)
+            .map(|n| (f64::from(y[n]) - tone(n as f64 / rate)).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 5e-4, "{worst}");
+        // Unstretched, the last samples are 0.2 ms (10 samples) off: far from the tones.
+        let off = (f64::from(x[95_000]) - tone(95_000.0 / rate)).abs();
+        assert!(off > 0.1, "{off}");
+    }
+
+    #[test]
+    fn a_true_clock_is_left_as_it_is() {
+        let x: Vec<f32> = (0..1000).map(|k| ((k * 37) % 101) as f32 / 101.0).collect();
+        let y = stretch(&x, 1.0);
+        assert_eq!(y.len(), x.len());
+        assert!(y.iter().zip(&x).all(|(a, b)| (a - b).abs() < 1e-6));
     }
 
     #[test]

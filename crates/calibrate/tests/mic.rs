@@ -313,4 +313,5 @@ fn a_take_on_the_virtual_robot_recovers_the_hidden_delays() {
     let w = t.warnings();
     assert_eq!(w.len(), 1, "{w:?}");
     assert!(w[0].contains("runs -25 ppm off the host's"), "{w:?}");
+    assert!(w[0].contains("corrected"), "{w:?}");
 }
