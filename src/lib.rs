@@ -8,7 +8,9 @@
 //! Cargo features, off by default: `alsa`, `orch play --out alsa:CLIENT:PORT`, through
 //! orch-io's own `alsa` feature (it links alsa-lib: `libasound2-dev` to build); `camera`,
 //! `orch conduct --source camera:/dev/video0`, through orch-baton's own `camera` feature (a
-//! V4L2 camera; the `v4l` crate's bindings are generated with libclang: `libclang-dev`).
+//! V4L2 camera; the `v4l` crate's bindings are generated with libclang: `libclang-dev`);
+//! `mic`, `orch calibrate --out OUT --mic DEVICE`, through orch-calibrate's own `mic` feature
+//! (ALSA capture: it links alsa-lib, `libasound2-dev`).
 
 pub mod analyze;
 pub mod baton;

@@ -36,7 +36,7 @@ pub fn start(
                 orch_perform::realtime::raise_priority();
             }
             let _ = opened_tx.send(Ok(()));
-            follow(source, follower, &control, &status);
+            follow(source, follower, &control, &status, stamp);
         }
         Err(e) => {
             let _ = opened_tx.send(Err(e));

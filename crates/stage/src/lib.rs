@@ -26,8 +26,9 @@
 //!   clock from a byte stream or UDP, OSC over UDP), parsed from a `--source` text
 //!   ([`sources::SourceSpec`]), opened ([`sources::open_source`]) and followed
 //!   ([`sources::follow`]: each cue to the follower, its answer to the performance's
-//!   `Control`), with what the conductor did ([`sources::Status`]); [`conductor`]: a source
-//!   opened and followed on a thread of its own.
+//!   `Control`, and the follower woken between cues when it asks), with what the conductor
+//!   did ([`sources::Status`]); [`conductor`]: a source opened and followed on a thread of
+//!   its own.
 //! - [`live`]: the live interpreter ([`LiveRobot`]): live MIDI bytes in, orch-core's
 //!   interpreter and guard, finger boards out (the virtual robot, or boards on a Linux I2C
 //!   bus), the stream passed on ([`thru`], re-framed by [`framer`]), a robot read again
