@@ -11,7 +11,8 @@ step "install: Debian packages, the firmware's nightly (firmware/install.sh), ru
 # firmware/install.sh: the AVR toolchain, simavr and what avr-tester builds it with, the
 # nightly pinned for the firmware with rust-src and rustfmt. tmux: the live view's test drives
 # `orch play` in a real pseudo-terminal with it. libasound2-dev: alsa-lib, which orch-io's `alsa`
-# feature (tested below with --all-features) links. libclang-dev: the `camera` feature's v4l
+# feature and orch-calibrate's `mic` feature (tested below with --all-features; the microphone
+# is alsa-lib's own `file` plugin, no sound card) link. libclang-dev: the `camera` feature's v4l
 # crate generates its kernel bindings with libclang at build time. timgm6mb-soundfont: the
 # General MIDI soundfont `orch render`'s tests play through (6 MB, GPL-2; never committed here:
 # installed in /usr/share/sounds/sf2). chromium and chromium-driver: `orch serve`'s browser tests

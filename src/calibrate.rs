@@ -1,6 +1,7 @@
-//! `orch calibrate`: the calibration score out, or a recording of it in and the calibrated
-//! robot.toml (or the measurements) out. The method is `orch-calibrate`'s; this is only the
-//! reading, writing and printing.
+//! `orch calibrate`: the calibration score out, or a recording of it in (a WAV file, or
+//! recorded live while the robot plays it) and the calibrated robot.toml (or the
+//! measurements) out. The method is `orch-calibrate`'s; this is only the reading, writing and
+//! printing.
 
 use std::io::Write;
 use std::path::Path;
@@ -33,44 +34,10 @@ fn robot(path: Option<&Path>) -> anyhow::Result<(Robot, String)> {
     }
 }
 
-fn round(v: f64) -> f64 {
-    (v * 100.0).round() / 100.0
-}
-
-/// The measurements as JSON:
-/// `{"capture_offset_ms":C,"anchor":{..},"keys":[{"note":N,"levels":[{"velocity":V,"press_delay_ms":D,"level_db":L}],"softest_velocity":S,"problems":[...],"fit":{..}}]}`.
+/// The measurements as JSON: `orch_calibrate::Calibration`'s own (the figures rounded to
+/// hundredths).
 pub fn json(cal: &Calibration) -> serde_json::Value {
-    let keys: Vec<_> = cal
-        .keys
-        .iter()
-        .map(|k| {
-            serde_json::json!({
-                "note": k.note,
-                "levels": k.levels.iter().map(|l| serde_json::json!({
-                    "velocity": l.velocity,
-                    "press_delay_ms": l.press_delay_ms.map(round),
-                    "level_db": l.level_db.map(round),
-                })).collect::<Vec<_>>(),
-                "softest_velocity": k.softest_velocity,
-                "problems": k.problems,
-                "fit": k.fit.map(|f| serde_json::json!({
-                    "press_delay_ms": round(f.press_delay_ms),
-                    "soft_press_delay_ms": round(f.soft_press_delay_ms),
-                    "softest_percent": round(f.softest_percent),
-                })),
-            })
-        })
-        .collect();
-    serde_json::json!({
-        "capture_offset_ms": round(cal.capture_offset_ms),
-        "anchor": {
-            "note": cal.anchor.note,
-            "press_delay_ms": cal.anchor.press_delay_ms,
-            "given": cal.anchor.given,
-        },
-        "keys": keys,
-        "warnings": cal.warnings,
-    })
+    serde_json::to_value(cal).expect("a calibration is JSON")
 }
 
 /// Runs `orch calibrate`.
@@ -94,20 +61,34 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
         );
         return Ok(());
     }
-    let path = args.wav.as_ref().expect("clap requires --score or --wav");
     let anchor: Option<Anchor> = args
         .anchor
         .as_deref()
         .map(str::parse)
         .transpose()
         .map_err(input_error)?;
-    let file = std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
-    let rec = Recording::read(std::io::BufReader::new(file))
-        .map_err(input_error)
-        .with_context(|| path.display().to_string())?;
+    let (rec, what) = match (&args.wav, &args.mic) {
+        (Some(path), _) => {
+            let file =
+                std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
+            let rec = Recording::read(std::io::BufReader::new(file))
+                .map_err(input_error)
+                .with_context(|| path.display().to_string())?;
+            (rec, path.display().to_string())
+        }
+        (None, Some(device)) => (live::record(args, device, &robot, &score)?, device.clone()),
+        (None, None) => unreachable!("clap requires --score, --wav or --mic"),
+    };
     let cal = analyze(&rec, &robot, &score, anchor)
         .map_err(input_error)
-        .with_context(|| path.display().to_string())?;
+        .with_context(|| what.clone())?;
+    if args.mic.is_some() {
+        eprintln!(
+            "orch: capture offset {:.1} ms (the output's and the microphone's latency beyond \
+             the press delays)",
+            cal.capture_offset_ms
+        );
+    }
     let mut out = std::io::stdout().lock();
     if args.json {
         writeln!(out, "{}", json(&cal))?;
@@ -129,4 +110,94 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
         eprintln!("orch: note {}: {}", k.note, k.problems.join("; "));
     }
     Ok(())
+}
+
+/// `--mic`: the score played on `--out` and recorded at once (orch-calibrate's `live`).
+#[cfg(feature = "mic")]
+mod live {
+    use std::sync::atomic::AtomicBool;
+    use std::sync::Arc;
+
+    use anyhow::Context;
+    use orch_calibrate::live::{take, TakeError};
+    use orch_calibrate::mic::Mic;
+    use orch_calibrate::{Recording, Score};
+
+    use crate::cli::CalibrateArgs;
+    use crate::error::bad_input;
+    use crate::robot::Robot;
+
+    pub fn record(
+        args: &CalibrateArgs,
+        device: &str,
+        robot: &Robot,
+        score: &Score,
+    ) -> anyhow::Result<Recording> {
+        let out = args.out.as_deref().expect("clap requires --out with --mic");
+        let out = orch_io::OutSpec::parse(out).map_err(|e| bad_input(e.to_string()))?;
+        // Created before the take, so that a path that cannot be written does not lose it.
+        let keep = match &args.keep {
+            Some(path) => Some((
+                path,
+                std::fs::File::create(path)
+                    .map_err(|e| bad_input(format!("--keep {}: {e}", path.display())))?,
+            )),
+            None => None,
+        };
+        let mic = Mic::open(device).map_err(|e| bad_input(e.to_string()))?;
+        // SIGINT, SIGTERM and SIGHUP stop the robot (every key released) and the recording.
+        let stop = Arc::new(AtomicBool::new(false));
+        for sig in [
+            signal_hook::consts::SIGINT,
+            signal_hook::consts::SIGTERM,
+            signal_hook::consts::SIGHUP,
+        ] {
+            signal_hook::flag::register(sig, Arc::clone(&stop))?;
+        }
+        let ms = score.length_ms();
+        eprintln!(
+            "orch: playing the calibration score on --out {} and recording it from --mic \
+             {device} ({}): {} min {} s",
+            out.text,
+            mic.format(),
+            ms / 60_000,
+            ms % 60_000 / 1000
+        );
+        let take = take(robot, score, out, mic, &stop).map_err(|e| match e {
+            TakeError::Output(m) => bad_input(m),
+            e => anyhow::Error::new(e),
+        })?;
+        for w in take.warnings() {
+            eprintln!("orch: warning: {w}");
+        }
+        if let Some((path, file)) = keep {
+            take.recording
+                .write(std::io::BufWriter::new(file))
+                .with_context(|| format!("--keep {}", path.display()))?;
+        }
+        Ok(take.recording)
+    }
+}
+
+/// `--mic` without the `mic` feature: said so, with how to build it.
+#[cfg(not(feature = "mic"))]
+mod live {
+    use orch_calibrate::{Recording, Score};
+
+    use crate::cli::CalibrateArgs;
+    use crate::error::bad_input;
+    use crate::robot::Robot;
+
+    pub fn record(
+        _args: &CalibrateArgs,
+        device: &str,
+        _robot: &Robot,
+        _score: &Score,
+    ) -> anyhow::Result<Recording> {
+        Err(bad_input(format!(
+            "--mic {device}: this orch was built without the `mic` feature (live capture \
+             through ALSA); build it with `cargo build --release --features mic` (needs \
+             libasound2-dev), or record the score yourself and give the recording with --wav"
+        )))
+    }
 }

@@ -34,7 +34,8 @@ pub enum Command {
     /// MIDI clock or OSC.
     Conduct(ConductArgs),
     /// Calibrate a robot by ear: write the calibration score (--score), or read a recording
-    /// of it (--wav) and print the calibrated robot.toml (or, with --json, the measurements).
+    /// of it (--wav), or play and record it live (--out, --mic), and print the calibrated
+    /// robot.toml (or, with --json, the measurements).
     Calibrate(CalibrateArgs),
     /// Render the virtual robot's performance of a MIDI file (or, with --score, the file
     /// itself) as sound, through a SoundFont, to a WAV file.
@@ -206,7 +207,7 @@ pub struct AnalyzeArgs {
 }
 
 #[derive(Args, Debug)]
-#[command(group(clap::ArgGroup::new("mode").required(true).args(["score", "wav"])))]
+#[command(group(clap::ArgGroup::new("mode").required(true).args(["score", "wav", "mic"])))]
 pub struct CalibrateArgs {
     /// Write the calibration score to this Standard MIDI File: the sync figure, then every
     /// key struck alone at each velocity level, one strike a second. Play it on the robot
@@ -217,6 +218,19 @@ pub struct CalibrateArgs {
     /// and print the calibrated robot.toml.
     #[arg(long, value_name = "REC.wav", conflicts_with = "score")]
     pub wav: Option<PathBuf>,
+    /// Play the score on the robot (--out) and record it at once from this ALSA capture
+    /// device (such as default or plughw:CARD=Mic,DEV=0; `arecord -L` lists them), then
+    /// print the calibrated robot.toml. Built with the `mic` feature.
+    #[arg(long, value_name = "DEVICE", requires = "out")]
+    pub mic: Option<String>,
+    /// With --mic: the robot to play the score on, as `orch play --out` takes it
+    /// (serial:DEVICE, rawmidi:DEVICE, udp:HOST:PORT, i2c:DEVICE, sim).
+    #[arg(long, value_name = "OUT", conflicts_with_all = ["score", "wav"])]
+    pub out: Option<String>,
+    /// With --mic: also write the recording to this WAV file (32-bit float, from the
+    /// score's start), to analyse again with --wav.
+    #[arg(long, value_name = "REC.wav", conflicts_with_all = ["score", "wav"])]
+    pub keep: Option<PathBuf>,
     /// The robot's configuration (see `orch config`); the thesis's robot if not given.
     #[arg(long, value_name = "FILE")]
     pub robot: Option<PathBuf>,
@@ -227,10 +241,10 @@ pub struct CalibrateArgs {
     /// One key's true press delay at full power, NOTE=MS (such as 60=14.5): it fixes the
     /// microphone's unknown latency. Without it, delays are relative to the robot file's
     /// press_delay for middle C.
-    #[arg(long, value_name = "NOTE=MS", requires = "wav")]
+    #[arg(long, value_name = "NOTE=MS", conflicts_with = "score")]
     pub anchor: Option<String>,
     /// Print the measurements as JSON instead of robot.toml.
-    #[arg(long, requires = "wav")]
+    #[arg(long, conflicts_with = "score")]
     pub json: bool,
 }
 

@@ -1,25 +1,27 @@
 //! `orch conduct`: a Standard MIDI File played live, following a conductor: a baton video
 //! (through `orch-baton`), tap tempo (a key in the live view), incoming MIDI clock (raw bytes
 //! from standard input, a file or device, or a UDP port) or OSC over UDP. The sources and the
-//! loop that follows them are `orch-stage`'s (`orch_stage::sources`); the follower
-//! (`orch_perform::Follower`) turns their cues into tempo changes of the performance, through
-//! the performance's `Control`. Here: the arguments, the threads, the view, the report.
+//! loop that follows them are `orch-stage`'s (`orch_stage::sources`, started on a thread of
+//! their own by `orch_stage::conductor`); the follower (`orch_perform::Follower`) turns their
+//! cues into tempo changes of the performance, through the performance's `Control`. Here: the
+//! arguments, the view, the report.
 
 use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use orch_perform::{Control, Follow, Follower, ScoreBeats, Tempo};
-use orch_stage::sources::{follow, open_source, source_name, SourceSpec, Stamp, Status};
+use orch_stage::sources::{source_name, SourceSpec, Stamp, Status};
 use orch_stage::SourceError;
 
 use crate::cli::{ConductArgs, FollowMode};
 use crate::error::bad_input;
-use crate::play::{self, Conductor, LiveOptions};
+use crate::live::{self, Conductor, LiveOptions};
+use crate::play;
 
 /// Runs `orch conduct`.
 pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
-    play::init_logging(args.verbose);
+    live::init_logging(args.verbose);
     let spec = SourceSpec::parse(&args.source).map_err(bad_input)?;
     let tap = spec == SourceSpec::Tap;
     if tap && (args.no_view || !std::io::IsTerminal::is_terminal(&std::io::stdout())) {
@@ -44,37 +46,13 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
     let stamp = Stamp(origin);
     let (tap_tx, tap_rx) = mpsc::channel();
     let status = Arc::new(Mutex::new(Status::default()));
-    {
-        // The source is opened on its own thread (a video's frame source stays there); an
-        // input that cannot be opened comes back here before anything plays.
-        let (control, status) = (Arc::clone(&control), Arc::clone(&status));
-        let (opened_tx, opened) = mpsc::channel();
-        let spec = spec.clone();
-        let taps = tap.then_some(tap_rx);
-        // A source that only waits for its input (not a video to decode) reads at the
-        // sender's priority: a cue is not left waiting behind other work on the machine.
-        let urgent = !matches!(spec, SourceSpec::Baton(_) | SourceSpec::Camera(_));
-        // Detached: a source blocked on its input ends with the process.
-        std::thread::spawn(move || match open_source(&spec, &control, stamp, taps) {
-            Ok(source) => {
-                if urgent {
-                    orch_perform::realtime::raise_priority();
-                }
-                let _ = opened_tx.send(Ok(()));
-                follow(source, follower, &control, &status);
-            }
-            Err(e) => {
-                let _ = opened_tx.send(Err(e));
-            }
-        });
-        opened
-            .recv()
-            .map_err(|_| anyhow::anyhow!("the tempo source's thread ended"))?
-            .map_err(|e| match e {
-                SourceError::BadInput(m) => bad_input(format!("--source {m}")),
-                e => anyhow::Error::new(e),
-            })?;
-    }
+    let taps = tap.then_some(tap_rx);
+    orch_stage::conductor::start(&spec, follower, &control, stamp, taps, &status).map_err(|e| {
+        match e {
+            SourceError::BadInput(m) => bad_input(format!("--source {m}")),
+            e => anyhow::Error::new(e),
+        }
+    })?;
     let name = source_name(&spec);
     let status_line = || status.lock().unwrap_or_else(|e| e.into_inner()).line(&name);
     let mut on_key = |c: char| {
@@ -82,7 +60,7 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
             let _ = tap_tx.send(stamp.now_us());
         }
     };
-    let played = play::play_live(
+    let played = live::play_live(
         song,
         lanes,
         LiveOptions {

@@ -1,28 +1,25 @@
-//! `orch play` and `orch analyze`: a Standard MIDI File performed on the virtual robot (or
-//! the robots `--out` names), and the report. The work is `orch-stage`'s (loading, setting
-//! up, playing, the report, the analysis, the account); here: the arguments, the live view's
-//! loop, the files and the printing.
+//! `orch play`: a Standard MIDI File performed on the virtual robot (or the robots `--out`
+//! names), live or on the virtual clock (`--fast`), and the report. The work is
+//! `orch-stage`'s (loading, setting up, playing, the report, the account); here: the
+//! arguments, the files and the printing (the live view is [`crate::live`]'s).
 
 use std::fs::File;
-use std::io::{BufWriter, IsTerminal, Write};
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
-use std::time::Duration;
 
 use anyhow::Context;
 use orch_io::{OutSpec, Target};
-use orch_perform::{Control, Setup, Tempo};
+use orch_perform::{Setup, Tempo};
 use orch_seq::Song;
-use orch_stage::session::{Ended, Lane, Session, SessionFailure, Snapshot};
-use orch_stage::{analyze, load_robot, load_song, text, Reports};
+use orch_stage::session::{Ended, Lane};
+use orch_stage::{load_robot, load_song, text, Reports};
 
-use crate::cli::{AnalyzeArgs, PlayArgs};
+use crate::cli::PlayArgs;
 use crate::error::bad_input;
-use crate::view::{Scene, View};
+use crate::live::{init_logging, play_live, LiveOptions};
 
 /// `--tempo`: the factor, if a session takes it.
-fn tempo(factor: f64) -> anyhow::Result<Tempo> {
+pub(crate) fn tempo(factor: f64) -> anyhow::Result<Tempo> {
     orch_stage::setup::tempo(factor).with_context(|| format!("--tempo {factor}"))
 }
 
@@ -76,7 +73,10 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
 }
 
 /// Creates the file an option names, if it names one.
-fn create(path: &Option<PathBuf>, option: &str) -> anyhow::Result<Option<BufWriter<File>>> {
+pub(crate) fn create(
+    path: &Option<PathBuf>,
+    option: &str,
+) -> anyhow::Result<Option<BufWriter<File>>> {
     match path {
         Some(path) => {
             Ok(Some(BufWriter::new(File::create(path).map_err(|e| {
@@ -105,86 +105,6 @@ pub(crate) fn from_bar(song: &Song, bar: Option<u32>) -> anyhow::Result<Option<u
     Ok(Some(start))
 }
 
-/// The jump keys of the live view: digits and Enter jump to the bar typed (Backspace takes a
-/// digit back), `[` to the bar before the one playing, `]` to the next. Returns the jump's
-/// target, µs of score time, if a key asks for one (a bar the song does not have asks for
-/// nothing).
-pub(crate) fn jump_key(
-    key: crate::view::Key,
-    typed: &mut String,
-    bar_now: u32,
-    song: &Song,
-) -> Option<u64> {
-    use crate::view::Key;
-    match key {
-        Key::Char(c @ '0'..='9') if typed.len() < 6 => {
-            typed.push(c);
-            None
-        }
-        Key::Backspace => {
-            typed.pop();
-            None
-        }
-        Key::Enter => {
-            let bar = std::mem::take(typed).parse().ok()?;
-            orch_stage::bars::bar_start(song, bar)
-        }
-        Key::Char('[') => orch_stage::bars::bar_start(song, bar_now.saturating_sub(1).max(1)),
-        Key::Char(']') => orch_stage::bars::bar_start(song, bar_now.saturating_add(1)),
-        _ => None,
-    }
-}
-
-/// Whether a key is one of the live view's jump keys.
-pub(crate) fn is_jump_key(key: crate::view::Key) -> bool {
-    use crate::view::Key;
-    matches!(
-        key,
-        Key::Char('0'..='9' | '[' | ']') | Key::Enter | Key::Backspace
-    )
-}
-
-/// How a live performance is shown and steered.
-pub(crate) struct LiveOptions<'a> {
-    /// The command that runs, for the view's head.
-    pub command: &'static str,
-    /// `--from`: start at this score time (µs), a jump before the first note.
-    pub from_us: Option<u64>,
-    /// The live view, if standard output is a terminal.
-    pub view: bool,
-    /// The file played (its name is the view's title).
-    pub file: &'a Path,
-    /// A conductor (`orch conduct`), steering the performance through its own control.
-    pub conductor: Option<Conductor<'a>>,
-}
-
-/// A conductor steering a live performance.
-pub(crate) struct Conductor<'a> {
-    /// The control the conductor steers; the performance's.
-    pub control: Arc<Control>,
-    /// The performer's clock's zero (the conductor's cues are timed on it).
-    pub origin: std::time::Instant,
-    /// The line the view shows under its head: the conductor's beats and tempo.
-    pub status: &'a dyn Fn() -> String,
-    /// A key pressed in the view (other than q and Esc).
-    pub on_key: &'a mut dyn FnMut(char),
-}
-
-/// Logging through `tracing` on standard error: warnings (a device or a board lost, and back),
-/// everything the outputs do with `--verbose`.
-pub(crate) fn init_logging(verbose: bool) {
-    let level = if verbose {
-        tracing::Level::DEBUG
-    } else {
-        tracing::Level::WARN
-    };
-    let _ = tracing_subscriber::fmt()
-        .with_writer(std::io::stderr)
-        .with_max_level(level)
-        .with_target(false)
-        .try_init();
-}
-
 /// The `--out` options; the virtual robot alone when there is none.
 pub(crate) fn out_specs(outs: &[String]) -> anyhow::Result<Vec<OutSpec>> {
     if outs.is_empty() {
@@ -193,143 +113,6 @@ pub(crate) fn out_specs(outs: &[String]) -> anyhow::Result<Vec<OutSpec>> {
     outs.iter()
         .map(|o| OutSpec::parse(o).map_err(|e| bad_input(e.to_string())))
         .collect()
-}
-
-/// Set by SIGINT, SIGTERM and SIGHUP: stop the way `q` does.
-fn stop_on_signals() -> anyhow::Result<Arc<AtomicBool>> {
-    let flag = Arc::new(AtomicBool::new(false));
-    for sig in [
-        signal_hook::consts::SIGINT,
-        signal_hook::consts::SIGTERM,
-        signal_hook::consts::SIGHUP,
-    ] {
-        signal_hook::flag::register(sig, Arc::clone(&flag))?;
-    }
-    Ok(flag)
-}
-
-/// Plays in real time: one sender thread per robot (real-time priority where allowed), all on
-/// one clock, the view on this thread. `q`, SIGINT, SIGTERM and SIGHUP stop every robot with
-/// every key released, and the reports still come; so does a panic, on any thread.
-pub(crate) fn play_live(
-    song: Song,
-    lanes: Vec<Lane>,
-    options: LiveOptions<'_>,
-) -> anyhow::Result<Vec<Ended>> {
-    let LiveOptions {
-        command,
-        from_us,
-        view: show,
-        file,
-        mut conductor,
-    } = options;
-    let signalled = stop_on_signals()?;
-    let show = show && std::io::stdout().is_terminal();
-    let title = file
-        .file_name()
-        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-    let (control, origin) = match &conductor {
-        Some(c) => (Arc::clone(&c.control), c.origin),
-        None => (Control::new(), std::time::Instant::now()),
-    };
-    if let Some(t) = from_us {
-        control.jump_to(t);
-    }
-    if lanes.is_empty() {
-        return Ok(Vec::new());
-    }
-    let session = Session::start(song, lanes, Arc::clone(&control), origin);
-    let watch = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        let mut view = if show { Some(View::start()?) } else { None };
-        let mut view_error = None;
-        // The bar being typed, and the bar playing (for `[` and `]`).
-        let mut typed = String::new();
-        let mut bar_now = 1;
-        while !session.is_finished() {
-            if signalled.load(Ordering::SeqCst) {
-                control.stop();
-            }
-            if let Some(v) = view.as_mut() {
-                let mut on_key = |key: crate::view::Key| {
-                    if is_jump_key(key) {
-                        if let Some(t) = jump_key(key, &mut typed, bar_now, session.song()) {
-                            control.jump_to(t);
-                        }
-                    } else if let (Some(c), crate::view::Key::Char(ch)) = (conductor.as_mut(), key)
-                    {
-                        (c.on_key)(ch);
-                    }
-                };
-                // Drawn every 20 ms; a key is taken as it comes.
-                if crate::view::keys(Some(&mut on_key), Duration::from_millis(20)) {
-                    control.stop();
-                }
-                if let Some(snapshot) = session.snapshot() {
-                    let mut scene = scene(snapshot, &title);
-                    bar_now = scene.bar;
-                    scene.command = command;
-                    scene.prompt = (!typed.is_empty()).then(|| typed.clone());
-                    if let Some(c) = &conductor {
-                        scene.conductor = Some((c.status)());
-                    }
-                    if let Err(e) = v.draw(&scene) {
-                        view_error = Some(e);
-                        control.stop();
-                    }
-                }
-            } else {
-                std::thread::sleep(Duration::from_millis(20));
-            }
-        }
-        drop(view);
-        anyhow::Ok(view_error)
-    }));
-    if watch.is_err() {
-        // The view panicked: stop the robots and let them go before the panic goes on.
-        control.stop();
-    }
-    let finished = session.finish();
-    if finished.priority_refused {
-        eprintln!(
-            "orch: note: the OS refused real-time priority to the sender; under load its \
-             messages may be late (see lateness in the report)"
-        );
-    }
-    match watch {
-        Err(panic) => std::panic::resume_unwind(panic),
-        Ok(Err(e)) => return Err(e),
-        Ok(Ok(Some(e))) => return Err(e.into()),
-        Ok(Ok(None)) => {}
-    }
-    if let Some((spec, why)) = finished.failed {
-        return Err(match why {
-            SessionFailure::Performance(e) => {
-                anyhow::Error::new(e).context(format!("--out {}", spec.text))
-            }
-            SessionFailure::Panicked => anyhow::anyhow!(
-                "the sender thread of --out {} panicked (its keys were released)",
-                spec.text
-            ),
-        });
-    }
-    Ok(finished.ended)
-}
-
-/// What the view shows of a session's snapshot.
-fn scene(s: Snapshot, title: &str) -> Scene {
-    Scene {
-        title: title.to_string(),
-        low_note: s.low_note,
-        down: s.keys_down,
-        bar: s.bar,
-        beat: s.beat,
-        bpm: s.bpm,
-        elapsed_s: s.elapsed_s,
-        total_s: s.total_s,
-        notes_sent: s.notes_sent,
-        notes: s.notes,
-        ..Scene::default()
-    }
 }
 
 /// Prints every robot's report (JSON or text); says on standard error when an output's
@@ -355,45 +138,6 @@ pub(crate) fn print_reports(
         writeln!(out, "{}", serde_json::to_string(&reports)?)?;
     } else {
         write!(out, "{}", text::reports(&reports, file))?;
-    }
-    Ok(())
-}
-
-pub fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
-    let song = load_song(&args.file)?;
-    let robot = load_robot(args.robot.as_deref())?;
-    let mut setup = orch_stage::setup::setup(&robot, true, tempo(args.tempo)?);
-    let svg_file = create(&args.svg, "--svg")?;
-    if svg_file.is_some() {
-        // The roll draws each strike to its key-up: the sound events are kept too.
-        setup.sim.keep = orch_sim::Keep::Everything;
-    }
-    let (analysis, played) = analyze(&song, &robot, &setup)?;
-    if let (Some(mut file), Some(path)) = (svg_file, &args.svg) {
-        let title = args.file.file_name().map_or_else(
-            || args.file.display().to_string(),
-            |n| n.to_string_lossy().into_owned(),
-        );
-        orch_stage::analysis::roll_svg(&song, &robot, &played, setup.tempo, &title)
-            .map_err(anyhow::Error::new)
-            .and_then(|svg| Ok(file.write_all(svg.as_bytes()).and_then(|()| file.flush())?))
-            .with_context(|| format!("--svg {}", path.display()))?;
-    }
-    if let (Some(mut file), Some(path)) = (create(&args.notes, "--notes")?, &args.notes) {
-        orch_stage::account::write_account(&mut file, &song, &played, setup.tempo, None)
-            .with_context(|| format!("--notes {}", path.display()))?;
-    }
-    let mut out = std::io::stdout().lock();
-    if args.json {
-        // `orch analyze --json` has the report's fields and the notes that went wrong; the
-        // findings are its text's.
-        let mut value = serde_json::to_value(&analysis)?;
-        if let Some(map) = value.as_object_mut() {
-            map.remove("findings");
-        }
-        writeln!(out, "{value}")?;
-    } else {
-        write!(out, "{}", text::analysis(&analysis, &args.file))?;
     }
     Ok(())
 }

@@ -13,10 +13,10 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use orch_io::{InTarget, MidiIn, OutSpec, Target};
-use orch_stage::run::{counters, End, Event, Loop, Said};
+use orch_stage::run::{counters, end_state, End, Event, Loop, Said};
 use orch_stage::thru::Thru;
-use orch_stage::{BoardWrite, LiveBoards, LiveError, LiveRobot, ReloadRefused};
-use serde_json::json;
+use orch_stage::writes;
+use orch_stage::{BoardWrite, LiveBoards, LiveError, LiveRobot};
 
 use crate::cli::RunArgs;
 use crate::error::bad_input;
@@ -59,37 +59,13 @@ fn live_err(e: LiveError) -> anyhow::Error {
     }
 }
 
-/// What the loop says, on standard error.
+/// What the loop says, on standard error, headed by what it is about.
 fn say(said: Said, input: &str) {
-    let restart = "restart orch run for that; the robot stays as it was";
     match said {
-        Said::TookOver => eprintln!("orch: the new robot configuration is in force"),
-        Said::Lost(e) => eprintln!(
-            "orch: --in {input}: the device went away ({e}); every key released; it is tried \
-             again every {} ms",
-            orch_io::RECONNECT_EVERY.as_millis()
-        ),
-        Said::Back => eprintln!("orch: --in {input}: the device is back"),
-        Said::Counters(c) => eprintln!("orch run: {c}"),
-        Said::NoFile => {
-            eprintln!("orch: SIGHUP: no --robot file to read again; the thesis's robot stays")
-        }
-        Said::Refused(path, e) => eprintln!(
-            "orch: SIGHUP: {} refused, the robot stays as it was: {e}",
-            path.display()
-        ),
-        Said::CannotReload(path, ReloadRefused::MovesBoards) => eprintln!(
-            "orch: SIGHUP: {} moves the I2C boards: {restart}",
-            path.display()
-        ),
-        Said::CannotReload(path, ReloadRefused::ChangesKinds) => eprintln!(
-            "orch: SIGHUP: {} changes the kind of a board (PCA9555, PCA9685): {restart}",
-            path.display()
-        ),
-        Said::Read(path) => eprintln!(
-            "orch: SIGHUP: {} read; it takes over when no key is down",
-            path.display()
-        ),
+        Said::Counters(_) => eprintln!("orch run: {said}"),
+        Said::Lost(_) | Said::Back => eprintln!("orch: --in {input}: {said}"),
+        Said::TookOver => eprintln!("orch: {said}"),
+        _ => eprintln!("orch: SIGHUP: {said}"),
     }
 }
 
@@ -121,7 +97,7 @@ fn flush_log(json: &mut Option<Log>) {
 
 /// `orch run`.
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
-    crate::play::init_logging(args.verbose);
+    crate::live::init_logging(args.verbose);
     let input = InTarget::parse(&args.input).map_err(|e| bad_input(e.to_string()))?;
     let out_spec = OutSpec::parse(&args.out).map_err(|e| bad_input(e.to_string()))?;
     let thru_specs: Vec<OutSpec> = args
@@ -163,7 +139,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         Box::new(move |write: &BoardWrite| {
             let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
             // Standard output gone (a closed pipe): the robot plays on without the log.
-            let _ = writeln!(w, "{}", orch_stage::writes::json(write));
+            let _ = writeln!(w, "{}", writes::json(write));
         }) as Box<dyn FnMut(&BoardWrite) + Send>
     });
     let din = matches!(input, InTarget::Serial(_));
@@ -199,13 +175,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
 
     let stopped = live.stop().map_err(live_err);
     if let Some(w) = &json {
-        let list: Vec<_> = live
-            .outputs()
-            .iter()
-            .map(|&(address, outputs)| json!({"address": address, "outputs": outputs}))
-            .collect();
         let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
-        let _ = writeln!(w, "{}", json!({"type": "final", "boards": list}));
+        let _ = writeln!(w, "{}", writes::final_json(&end_state(&live)));
     }
     flush_log(&mut json);
     if args.verbose {

@@ -13,7 +13,8 @@ use orch_serve::{Access, Config};
 
 use crate::cli::ServeArgs;
 use crate::error::bad_input;
-use crate::play::{init_logging, out_specs};
+use crate::live::init_logging;
+use crate::play::out_specs;
 
 pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     init_logging(args.verbose);

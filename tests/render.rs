@@ -91,7 +91,9 @@ fn render(midi: &Path, robot: &Path, score: bool, name: &str) -> (Vec<f32>, Vec<
 
 /// The note-by-note account of `orch analyze`.
 fn account(midi: &Path, robot: &Path) -> Vec<Value> {
-    let notes = tmp("notes.jsonl");
+    // A file of each test's own (they run at once in this process).
+    let stem = midi.file_stem().unwrap().to_string_lossy();
+    let notes = tmp(&format!("{stem}.notes.jsonl"));
     let o = orch()
         .arg("analyze")
         .arg(midi)

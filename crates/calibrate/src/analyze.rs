@@ -66,9 +66,11 @@ pub struct Level {
     #[serde(skip)]
     pub duty_percent: f64,
     /// From the asked time to the sound, ms (`null`: no single onset).
+    #[serde(serialize_with = "hundredths_or_null")]
     pub press_delay_ms: Option<f64>,
     /// The string's level just after the onset, dB (mean-square; 0 dB is a full-scale
     /// square wave's power).
+    #[serde(serialize_with = "hundredths_or_null")]
     pub level_db: Option<f64>,
 }
 
@@ -76,13 +78,17 @@ pub struct Level {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct KeyFigures {
     /// `mechanics.key.press_delay`, ms.
+    #[serde(serialize_with = "hundredths")]
     pub press_delay_ms: f64,
     /// `mechanics.key.soft_press_delay`, ms.
+    #[serde(serialize_with = "hundredths")]
     pub soft_press_delay_ms: f64,
     /// `mechanics.key.softest`: the softest duty that sounds, per cent (100 on a key
     /// played at full power only).
+    #[serde(serialize_with = "hundredths")]
     pub softest_percent: f64,
     /// Whether the key plays velocity (a PWM key): its `[dynamics]` and softest are fitted.
+    #[serde(skip)]
     pub dynamics: bool,
 }
 
@@ -101,11 +107,13 @@ pub struct KeyResult {
     pub fit: Option<KeyFigures>,
 }
 
-/// The whole calibration.
+/// The whole calibration. As JSON (`orch calibrate --json`), the measured figures are
+/// rounded to hundredths (of a ms, a dB, a per cent); the anchor's delay is as given.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Calibration {
     /// When the score's time 0 is in the recording, ms (with the anchor: onset = asked time +
     /// press delay + this).
+    #[serde(serialize_with = "hundredths")]
     pub capture_offset_ms: f64,
     /// What the delays are pinned to.
     pub anchor: AnchorUsed,
@@ -119,6 +127,19 @@ impl Calibration {
     /// The keys with problems.
     pub fn keys_with_problems(&self) -> impl Iterator<Item = &KeyResult> {
         self.keys.iter().filter(|k| !k.problems.is_empty())
+    }
+}
+
+/// A figure rounded to hundredths, as JSON.
+fn hundredths<S: serde::Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_f64((v * 100.0).round() / 100.0)
+}
+
+/// [`hundredths`], or `null`.
+fn hundredths_or_null<S: serde::Serializer>(v: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+    match v {
+        Some(v) => hundredths(v, s),
+        None => s.serialize_none(),
     }
 }
 

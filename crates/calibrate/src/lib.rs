@@ -66,13 +66,26 @@
 //! with noise, reverberation and a capture offset: the tests and the accuracy figures
 //! (`cargo run --release -p orch-calibrate --example accuracy`) use it.
 //!
-//! No Cargo features.
+//! # Recording live
+//! With the `mic` feature, the `mic` module records from an ALSA capture device and `live`
+//! plays the score on the robot through orch-stage's live session while recording it, the
+//! recording lined up with the performance (`orch calibrate --out OUT --mic DEVICE`).
+//!
+//! ## Cargo features
+//!
+//! - `mic` (off by default): the `mic` and `live` modules, the live capture. It links alsa-lib
+//!   (`libasound2-dev` to build) through the `alsa` crate, and brings orch-stage (the live
+//!   session) in. Without it the crate reads recordings from WAV files only.
 
 pub mod analyze;
 mod envelope;
 mod error;
 pub mod fit;
 mod listen;
+#[cfg(feature = "mic")]
+pub mod live;
+#[cfg(feature = "mic")]
+pub mod mic;
 mod onset;
 pub mod robot_toml;
 pub mod score;

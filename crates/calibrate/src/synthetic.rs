@@ -385,3 +385,27 @@ pub fn errors(
     e.velocity_median_steps = crate::onset::median(&mut per_key_velocity);
     e
 }
+
+/// A sample as a capture device reading `S32_LE` delivers it (full scale is `i32::MAX`).
+pub fn s32(x: f32) -> i32 {
+    (f64::from(x.clamp(-1.0, 1.0)) * 2_147_483_647.0).round() as i32
+}
+
+/// Mono samples as raw `S32_LE` frames: what ALSA's `file` plugin plays as a microphone for a
+/// capture that negotiates S32_LE mono (the `mic` feature's first choice on a device, such as
+/// the `null` plugin, that takes every format).
+pub fn raw_s32(samples: &[f32]) -> Vec<u8> {
+    samples.iter().flat_map(|&x| s32(x).to_le_bytes()).collect()
+}
+
+/// An ALSA configuration (for an `asoundrc`) defining the capture PCM `name` as a microphone
+/// that plays the raw frames of `infile` (ALSA's `file` plugin over its `null` one): the tests'
+/// sound card. At the file's end the plugin goes on giving the last samples it read; a FIFO
+/// that is held open without data makes a microphone that stops.
+pub fn file_mic_conf(name: &str, infile: &std::path::Path) -> String {
+    format!(
+        "pcm.{name} {{\n  type file\n  slave.pcm \"null\"\n  file \"/dev/null\"\n  infile \"{}\"\n  \
+         format \"raw\"\n}}\n",
+        infile.display()
+    )
+}

@@ -28,6 +28,18 @@ fn settles(errors: &[f64], change: usize) -> Option<usize> {
     }
 }
 
+/// 1st, 2nd, 3rd, 4th…
+fn ordinal(n: usize) -> String {
+    let suffix = match (n % 10, n % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{n}{suffix}")
+}
+
 fn quantile(v: &[f64], q: f64) -> f64 {
     let mut v = v.to_vec();
     v.sort_by(f64::total_cmp);
@@ -39,7 +51,7 @@ fn main() {
     println!(
         "abrupt change of tempo after 16 beats, 16 beats after it (score at the first tempo):"
     );
-    for (from, to) in [(100.0, 130.0), (130.0, 91.0)] {
+    for (from, to) in [(100.0, 130.0), (130.0, 90.0), (130.0, 91.0)] {
         let beats = conducted::abrupt(from, 16, to, 16);
         let song = Song::parse(&smf::quarters_smf(34, from)).unwrap();
         for (name, follow) in modes {
@@ -48,8 +60,11 @@ fn main() {
             let worst = e[17..].iter().fold(0f64, |a, x| a.max(x.abs()));
             match settles(&e, 16) {
                 Some(n) => println!(
-                    "  {from} -> {to} BPM, {name}: every note within 25 ms from the {n}th beat \
-                     at the new tempo on (the change recognised at the 2nd); worst {worst:.0} ms"
+                    "  {from} -> {to} BPM, {name}: every note within 25 ms from the {} beat \
+                     at the new tempo on (the change recognised at the 2nd); worst {worst:.0} ms; \
+                     the 1st to 5th: {:.0?} ms",
+                    ordinal(n),
+                    &e[17..22]
                 ),
                 None => println!(
                     "  {from} -> {to} BPM, {name}: never within 25 ms (the last note {:.0} ms \

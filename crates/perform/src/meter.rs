@@ -95,6 +95,16 @@ impl Meter {
         self.period
     }
 
+    /// The last beat taken, µs (`None` before the first, and after a restart).
+    pub fn last(&self) -> Option<u64> {
+        self.last
+    }
+
+    /// The odd beat held back, µs, if one is (until the next beat decides what it was).
+    pub fn held(&self) -> Option<u64> {
+        self.odd
+    }
+
     /// A tempo stated by the conductor: the period is `period_us` from now on, and the run
     /// starts again.
     pub fn state(&mut self, period_us: f64) {

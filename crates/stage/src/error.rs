@@ -37,7 +37,7 @@ pub enum StageError {
         /// The song's last bar.
         last: u32,
     },
-    /// A tempo factor outside [`crate::setup::TEMPO_RANGE`].
+    /// A tempo factor outside [`orch_perform::follow::FACTOR_RANGE`].
     Tempo(f64),
     /// A performance failed while playing (said as the performer says it).
     Perform(PerformError),
@@ -58,7 +58,7 @@ impl fmt::Display for StageError {
             StageError::Song { name, .. } => write!(f, "{name} is not a playable MIDI file"),
             StageError::NoSuchBar { last, .. } => write!(f, "the song has bars 1 to {last}"),
             StageError::Tempo(_) => {
-                let (low, high) = crate::setup::TEMPO_RANGE.into_inner();
+                let (low, high) = orch_perform::follow::FACTOR_RANGE;
                 write!(f, "give a factor from {low} to {high}, such as 0.5 or 1.25")
             }
             StageError::Perform(e) => write!(f, "{e}"),

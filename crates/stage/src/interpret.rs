@@ -11,9 +11,9 @@ use std::fmt::Write as _;
 
 use orch_core::{BoardId, Counters, Duty, FingerBoards, Instant, Stats};
 use orch_robot::{BoardKind, HostInterpreter, Robot, RobotError};
-use serde_json::{json, Value};
+use serde_json::Value;
 
-use crate::writes::{duties, duty_text};
+use crate::writes::{duties, duty_text, BoardState};
 use crate::BoardWrite;
 
 /// One DIN MIDI byte on the wire: 10 bits at 31250 baud.
@@ -64,17 +64,6 @@ pub struct Interpretation {
     writes: Writes,
     /// The next byte's index.
     index: u64,
-}
-
-/// A board's state at the end.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct BoardState {
-    /// The board's 7-bit address.
-    pub address: u8,
-    /// The 16 outputs on.
-    pub outputs: u16,
-    /// A PWM board's 16 duties (0..=4095); `None` for an on/off board.
-    pub duty: Option<[u16; 16]>,
 }
 
 /// Where an interpretation ended: the decoder's counters, whether the end of the input cut a
@@ -167,17 +156,9 @@ impl Interpretation {
 }
 
 impl End {
-    /// The end as the last JSON line: `{"type":"final","boards":[...]}`.
+    /// The end as the last JSON line ([`crate::writes::final_json`]).
     pub fn json(&self) -> Value {
-        let list: Vec<Value> = self
-            .boards
-            .iter()
-            .map(|b| match b.duty {
-                Some(duty) => json!({"address": b.address, "outputs": b.outputs, "duty": duty}),
-                None => json!({"address": b.address, "outputs": b.outputs}),
-            })
-            .collect();
-        json!({"type": "final", "boards": list})
+        crate::writes::final_json(&self.boards)
     }
 
     /// The end as the last lines of text (`#` comments): the decoder's counters, the notes

@@ -1,8 +1,10 @@
 //! # orch-stage: one live session of orch
 //!
-//! What every front end of orch drives and watches while a robot plays live: the terminal
-//! (`orch play`, `orch conduct`, `orch run`), and later a daemon or a web page. The front end
-//! parses its arguments and draws; the session's parts live here.
+//! What every front end of orch drives and watches while a robot plays: the terminal
+//! (`orch play`, `orch analyze`, `orch conduct`, `orch run`, `orch decode`,
+//! `orch interpret`), a daemon, a web page. The front end parses its arguments, prints and
+//! draws; everything else lives here, so that a second front end says and does exactly what
+//! the first does.
 //!
 //! A song and a robot:
 //!
@@ -10,40 +12,53 @@
 //!   the rest, its size capped) and the robot ([`load_robot`]: robot.toml, or the thesis's).
 //! - [`setup`]: how a robot plays (the performance's `Setup`), the tempo factors allowed,
 //!   and a performance on the virtual clock, as fast as the machine goes.
-//! - [`bars`]: bars as people count them, and where each begins (for a jump there).
+//! - [`bars`]: bars as people count them, where each begins (for a jump there), and a bar
+//!   typed a digit at a time.
 //!
 //! Playing it, live or on the virtual clock:
-//!
-//! - [`sources`]: the conductor's tempo sources (a baton video or camera, tap tempo, MIDI
-//!   clock from a byte stream or UDP, OSC over UDP), parsed from a `--source` text
-//!   ([`sources::SourceSpec`]), opened ([`sources::open_source`]) and followed
-//!   ([`sources::follow`]: each cue to the follower, its answer to the performance's
-//!   `Control`), with what the conductor did ([`sources::Status`]).
-//!
-//! - [`live`]: the live interpreter loop ([`LiveRobot`]): live MIDI bytes in, orch-core's
-//!   interpreter and guard, finger boards out (the virtual robot, or boards on a Linux I2C
-//!   bus), the stream passed on ([`thru`], re-framed by [`framer`]), a robot read again
-//!   swapped in when every key is up; every board write shown to whoever watches
-//!   ([`BoardWrite`]).
 //!
 //! - [`session`]: a song played live on one or more robots ([`session::Session`]: a sender
 //!   thread a robot, one clock, one `Control` for stop, pause, jump, tempo and a conductor;
 //!   jump to a bar, a checked tempo factor and tap tempo on the session itself),
 //!   a [`session::Snapshot`] of where it stands for any front end, every robot's report and
-//!   note-by-note account at the end.
+//!   note-by-note account at the end; [`watch`]: a session played to its end with a front
+//!   end watching on its own thread (every robot stopped if it fails or panics).
+//! - [`sources`]: the conductor's tempo sources (a baton video or camera, tap tempo, MIDI
+//!   clock from a byte stream or UDP, OSC over UDP), parsed from a `--source` text
+//!   ([`sources::SourceSpec`]), opened ([`sources::open_source`]) and followed
+//!   ([`sources::follow`]: each cue to the follower, its answer to the performance's
+//!   `Control`, and the follower woken between cues when it asks), with what the conductor
+//!   did ([`sources::Status`]); [`conductor`]: a source opened and followed on a thread of
+//!   its own.
+//! - [`live`]: the live interpreter ([`LiveRobot`]): live MIDI bytes in, orch-core's
+//!   interpreter and guard, finger boards out (the virtual robot, or boards on a Linux I2C
+//!   bus), the stream passed on ([`thru`], re-framed by [`framer`]), a robot read again
+//!   swapped in when every key is up; every board write shown to whoever watches
+//!   ([`BoardWrite`]); [`run`]: its loop (input events and a front end's requests in, what
+//!   happened out, the guard's deadlines kept).
 //!
-//! What it leaves:
+//! Raw MIDI bytes, off line:
+//!
+//! - [`bytes`]: bytes from a reader as they arrive, raw or hex text ([`hex`]), in bounded
+//!   memory.
+//! - [`messages`]: the decoded messages as text (as `aseqdump`) or JSON (as mido), with the
+//!   decoder's counters; [`interpret`]: bytes through the interpreter and the guard at DIN
+//!   wire speed, every board write ([`writes`]: as text or JSON) and the boards' end state.
+//!
+//! What a performance leaves:
 //!
 //! - [`report`]: every robot's report ([`Reports`], JSON through serde), and [`text`]: the
-//!   reports as people read them, exactly as `orch play` prints them.
+//!   reports and the analysis as people read them, exactly as `orch play` and `orch analyze`
+//!   print them.
 //! - [`analysis`]: whether a robot can play a song and what will go wrong, without playing
 //!   it live ([`analyze`] gives an [`Analysis`]: the report, the notes that will go wrong,
 //!   the [`findings`] in words; the piano roll as SVG).
 //! - [`account`]: the note-by-note account and the board writes, a JSON line each.
 //!
 //! Errors ([`error`]) are [`StageError`] (a song, a bar, a tempo, a performance),
-//! [`SourceError`] (a tempo source: bad input, named, or the I/O failure behind it) and
-//! [`LiveError`] (the live loop); each says whether the user's input is at fault.
+//! [`SourceError`] (a tempo source: bad input, named, or the I/O failure behind it),
+//! [`LiveError`] (the live loop), and the readers' own ([`bytes::ReadError`],
+//! [`hex::HexError`]); each says whether the user's input is at fault.
 //!
 //! ## Cargo features
 //!
@@ -55,6 +70,7 @@ pub mod account;
 pub mod analysis;
 pub mod bars;
 pub mod bytes;
+pub mod conductor;
 pub mod error;
 pub mod findings;
 pub mod framer;
@@ -70,6 +86,7 @@ pub mod setup;
 pub mod sources;
 pub mod text;
 pub mod thru;
+pub mod watch;
 pub mod writes;
 
 pub use analysis::{analyze, Analysis, Wrong};

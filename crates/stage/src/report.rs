@@ -2,7 +2,7 @@
 //! [`Report`] alone, or each robot's with where it played, the channels it took and its
 //! output's figures ([`Reports`]). JSON through serde; text through [`crate::text`].
 
-use orch_io::{OutSpec, OutStats};
+use orch_io::OutStats;
 use orch_perform::Report;
 use serde::ser::{SerializeMap, Serializer};
 use serde::Serialize;
@@ -77,15 +77,11 @@ pub struct RobotReport {
 impl RobotReport {
     /// The robot's report from its end of the session.
     pub fn of(ended: &Ended) -> Self {
-        Self::new(&ended.spec, &ended.played.report(None), ended.stats)
-    }
-
-    fn new(spec: &OutSpec, report: &Report, stats: Option<OutStats>) -> Self {
         Self {
-            out: spec.text.clone(),
-            channels: spec.channels.to_string(),
-            link: stats.map(LinkFigures::from),
-            report: report.clone(),
+            out: ended.spec.text.clone(),
+            channels: ended.spec.channels.to_string(),
+            link: ended.stats.map(LinkFigures::from),
+            report: ended.played.report(None),
         }
     }
 

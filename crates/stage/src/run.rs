@@ -10,6 +10,7 @@ use std::time::{Duration, Instant as Wall};
 use orch_io::InEvent;
 use orch_robot::{Robot, RobotError};
 
+use crate::writes::BoardState;
 use crate::{LiveError, LiveRobot, ReloadRefused};
 
 /// What the loop waits for.
@@ -50,6 +51,43 @@ pub enum Said {
     CannotReload(PathBuf, ReloadRefused),
     /// The robot's file was read again; it takes over when no key is down.
     Read(PathBuf),
+}
+
+impl std::fmt::Display for Said {
+    /// What happened in words, as `orch run` says it (after its own head: the input for
+    /// [`Said::Lost`] and [`Said::Back`], the signal for a robot file read again).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let restart = "restart orch run for that; the robot stays as it was";
+        match self {
+            Said::TookOver => f.write_str("the new robot configuration is in force"),
+            Said::Lost(e) => write!(
+                f,
+                "the device went away ({e}); every key released; it is tried again every {} ms",
+                orch_io::RECONNECT_EVERY.as_millis()
+            ),
+            Said::Back => f.write_str("the device is back"),
+            Said::Counters(c) => f.write_str(c),
+            Said::NoFile => f.write_str("no --robot file to read again; the thesis's robot stays"),
+            Said::Refused(path, e) => write!(
+                f,
+                "{} refused, the robot stays as it was: {e}",
+                path.display()
+            ),
+            Said::CannotReload(path, ReloadRefused::MovesBoards) => {
+                write!(f, "{} moves the I2C boards: {restart}", path.display())
+            }
+            Said::CannotReload(path, ReloadRefused::ChangesKinds) => write!(
+                f,
+                "{} changes the kind of a board (PCA9555, PCA9685): {restart}",
+                path.display()
+            ),
+            Said::Read(path) => write!(
+                f,
+                "{} read; it takes over when no key is down",
+                path.display()
+            ),
+        }
+    }
 }
 
 /// Why the loop ended.
@@ -107,6 +145,19 @@ pub fn counters(live: &LiveRobot) -> String {
         lost,
         cut
     )
+}
+
+/// Every board's state when the loop has ended: its outputs (a PWM board's too, without its
+/// duties: the write log has them).
+pub fn end_state(live: &LiveRobot) -> Vec<BoardState> {
+    live.outputs()
+        .iter()
+        .map(|&(address, outputs)| BoardState {
+            address,
+            outputs,
+            duty: None,
+        })
+        .collect()
 }
 
 impl Loop<'_> {

@@ -2,9 +2,8 @@
 //! front end may ask for, and a performance on the virtual clock (as fast as the machine
 //! goes: a ten-minute piece in a few tens of ms).
 
-use std::ops::RangeInclusive;
-
 use orch_io::Output;
+use orch_perform::follow::FACTOR_RANGE;
 use orch_perform::{
     perform, song_events, Control, Link, MidiRecording, Played, Setup, Spread, Tempo,
 };
@@ -14,13 +13,12 @@ use orch_seq::{Song, VirtualClock};
 use crate::session::{lane_events, Ended, Lane};
 use crate::StageError;
 
-/// The tempo factors a session takes: a twentieth to twenty times as written.
-pub const TEMPO_RANGE: RangeInclusive<f64> = 0.05..=20.0;
-
-/// The tempo `factor` (1.0: as written), if it is in [`TEMPO_RANGE`].
+/// The tempo `factor` (1.0: as written), if it is in [`FACTOR_RANGE`] (a twentieth to
+/// twenty times as written, as a conductor may ask).
 pub fn tempo(factor: f64) -> Result<Tempo, StageError> {
+    let (low, high) = FACTOR_RANGE;
     Tempo::new(factor)
-        .filter(|t| TEMPO_RANGE.contains(&t.get()))
+        .filter(|t| (low..=high).contains(&t.get()))
         .ok_or(StageError::Tempo(factor))
 }
 

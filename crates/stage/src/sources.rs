@@ -8,7 +8,7 @@ use std::io::Read;
 use std::net::{SocketAddr, UdpSocket};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::Receiver;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 use orch_baton::source::{self, FrameSource};
@@ -291,43 +291,87 @@ impl Status {
 }
 
 /// Hands each cue of `source` to the follower and the follower's answer to `control`, until
-/// the source ends.
+/// the source ends; between cues, wakes the follower when it asks ([`Follower::due`], on
+/// `stamp`'s clock, the performer's): an early beat that can no longer be an invented one, a
+/// beat overdue, a hedge or a pull done.
 pub fn follow(
     mut source: Box<dyn TempoSource>,
-    mut follower: Follower,
+    follower: Follower,
     control: &Control,
     status: &Mutex<Status>,
+    stamp: Stamp,
 ) {
     let set = |f: &dyn Fn(&mut Status)| f(&mut status.lock().unwrap_or_else(|e| e.into_inner()));
-    loop {
-        let cue = match source.next_cue() {
-            Ok(Some(c)) => c,
-            Ok(None) => {
-                set(&|s| s.ended = Some("its input ended".into()));
-                return;
-            }
-            Err(e) => {
-                tracing::warn!("{e}");
-                set(&|s| s.ended = Some(e.to_string()));
-                return;
-            }
-        };
-        if control.stopping() {
-            return;
-        }
-        let action = follower.cue(&cue, control.time_map().as_ref());
-        let bpm = follower.bpm();
-        let is_beat = matches!(cue.cue, Cue::Beat { .. });
-        action.apply(control, cue.t_us);
+    // The follower, and whether the source has ended; the waker waits on `changed`.
+    let shared = Mutex::new((follower, false));
+    let changed = Condvar::new();
+    let lock = || shared.lock().unwrap_or_else(|e| e.into_inner());
+    let answer = |action: Action, bpm: Option<f64>, beat: bool, t_us: u64| {
+        action.apply(control, t_us);
         set(&|s| {
-            s.beats += u64::from(is_beat);
+            s.beats += u64::from(beat);
             s.bpm = bpm.or(s.bpm);
             if let Action::Tempo(t) = action {
                 s.factor = Some(t.get());
             }
             s.paused = control.paused();
         });
-    }
+    };
+    std::thread::scope(|scope| {
+        scope.spawn(|| {
+            let mut g = lock();
+            loop {
+                if g.1 || control.stopping() {
+                    return;
+                }
+                let now = stamp.now_us();
+                match g.0.due() {
+                    None => g = changed.wait(g).unwrap_or_else(|e| e.into_inner()),
+                    Some(d) if d > now => {
+                        let wait = Duration::from_micros(d - now);
+                        g = changed
+                            .wait_timeout(g, wait)
+                            .unwrap_or_else(|e| e.into_inner())
+                            .0;
+                    }
+                    Some(_) => {
+                        let action = g.0.wake(now, control.time_map().as_ref());
+                        answer(action, g.0.bpm(), false, now);
+                    }
+                }
+            }
+        });
+        let end = |why: Option<String>| {
+            if let Some(why) = why {
+                set(&|s| s.ended = Some(why.clone()));
+            }
+            lock().1 = true;
+            changed.notify_all();
+        };
+        loop {
+            let cue = match source.next_cue() {
+                Ok(Some(c)) => c,
+                Ok(None) => return end(Some("its input ended".into())),
+                Err(e) => {
+                    tracing::warn!("{e}");
+                    return end(Some(e.to_string()));
+                }
+            };
+            if control.stopping() {
+                return end(None);
+            }
+            let mut g = lock();
+            let action = g.0.cue(&cue, control.time_map().as_ref());
+            answer(
+                action,
+                g.0.bpm(),
+                matches!(cue.cue, Cue::Beat { .. }),
+                cue.t_us,
+            );
+            drop(g);
+            changed.notify_all();
+        }
+    });
 }
 
 /// Opens the source `spec` names for a performance steered by `control`, its cues stamped on

@@ -1,11 +1,36 @@
 //! Board writes ([`BoardWrite`]) as people and scripts read them: a line of text (the time,
 //! the byte or timer that caused it, the board, its 16 outputs or a PWM board's duties), or a
-//! JSON object. `orch interpret` and `orch run --json` show them so.
+//! JSON object; the boards' state at the end ([`BoardState`]) as the last JSON line.
+//! `orch interpret` and `orch run --json` show them so.
 
 use orch_core::Duty;
 use serde_json::{json, Value};
 
 use crate::BoardWrite;
+
+/// A board's state at the end.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BoardState {
+    /// The board's 7-bit address.
+    pub address: u8,
+    /// The 16 outputs on.
+    pub outputs: u16,
+    /// A PWM board's 16 duties (0..=4095); `None` for an on/off board.
+    pub duty: Option<[u16; 16]>,
+}
+
+/// The boards' state at the end as the last JSON line: `{"type":"final","boards":[...]}`,
+/// each board's `address`, `outputs` and (a PWM board's) `duty`.
+pub fn final_json(boards: &[BoardState]) -> Value {
+    let list: Vec<Value> = boards
+        .iter()
+        .map(|b| match b.duty {
+            Some(duty) => json!({"address": b.address, "outputs": b.outputs, "duty": duty}),
+            None => json!({"address": b.address, "outputs": b.outputs}),
+        })
+        .collect();
+    json!({"type": "final", "boards": list})
+}
 
 /// A write as a JSON object: `t_us`, `byte` (null for a timer's), `address`, and `duty` (a
 /// PWM board's 16 duties) or `outputs`.

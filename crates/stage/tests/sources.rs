@@ -31,7 +31,7 @@ fn a_midi_clock_file_is_followed_to_its_end_beat_by_beat() {
     let control = Control::new();
     let source = open_source(&spec, &control, Stamp(Instant::now()), None).unwrap();
     let status = Mutex::new(Status::default());
-    follow(source, follower(), &control, &status);
+    follow(source, follower(), &control, &status, Stamp(Instant::now()));
     let s = status.lock().unwrap();
     assert_eq!(s.beats, 8, "{s:?}");
     assert!(s.paused, "MIDI Stop pauses the performance");
@@ -49,7 +49,7 @@ fn taps_from_the_view_are_beats() {
     }
     drop(tx);
     let status = Mutex::new(Status::default());
-    follow(source, follower(), &control, &status);
+    follow(source, follower(), &control, &status, Stamp(Instant::now()));
     assert_eq!(status.lock().unwrap().beats, 4);
 }
 

@@ -1,7 +1,8 @@
 //! A conductor on the virtual clock: beats at known times, sent as a source's bytes (OSC
 //! packets or MIDI clock) through that source's decoder and the follower to a performance
-//! of the virtual robot; each note's sound against its beat. Shared by the conductor's tests
-//! and the `follow_figures` example (`#[path]`-included there).
+//! of the virtual robot; each note's sound against its beat. Shared by the conductor's tests,
+//! the `follow_figures` example and `orch`'s baton tests (whose video frames are the inputs;
+//! `#[path]`-included there).
 #![allow(dead_code)]
 
 use std::sync::Arc;
@@ -14,33 +15,39 @@ use orch_perform::{
 use orch_seq::{Bell, Clock, Lateness, Song, VirtualClock};
 
 /// A clock whose waits deliver the conductor's input falling inside them: each input at its
-/// own time (µs after the score's start) goes through `apply`, which may steer `control`. A
-/// wait on the control's bell ends at the input that rings it, at that input's time (as the
-/// real performer wakes when a cue arrives).
-pub struct Conducted<F: FnMut(u64, &Control)> {
+/// own time (µs after the score's start) goes through `apply` (with the input's index), which
+/// may steer `control` and returns when it wants to be called again with no input (the
+/// follower's [`due`](Follower::due), on the wall clock): then `apply` is called with `None`
+/// (as the real follower's waker does). A wait on the control's bell ends at the call that
+/// rings it, at that call's time (as the real performer wakes when a cue arrives).
+pub struct Conducted<F: FnMut(u64, Option<usize>, &Control) -> Option<u64>> {
     inner: VirtualClock,
     /// Times (from the score's start) at which `apply` is called, in order.
     times: Vec<u64>,
     next: usize,
+    /// When `apply` asked to be called with no input (wall clock), if it did.
+    wake: Option<u64>,
     start: Option<u64>,
     control: Arc<Control>,
     apply: F,
 }
 
-impl<F: FnMut(u64, &Control)> Conducted<F> {
+impl<F: FnMut(u64, Option<usize>, &Control) -> Option<u64>> Conducted<F> {
     pub fn new(control: &Arc<Control>, times: Vec<u64>, apply: F) -> Self {
         Self {
             inner: VirtualClock::new(),
             times,
             next: 0,
+            wake: None,
             start: None,
             control: Arc::clone(control),
             apply,
         }
     }
 
-    /// Delivers the inputs up to `deadline_us`; with `bell`, stops after the first that rings
-    /// it (after `seen` rings), the clock at that input's time: whether one did.
+    /// Delivers the inputs and wakes up to `deadline_us` (an input before a wake at the same
+    /// time); with `bell`, stops after the first that rings it (after `seen` rings), the clock
+    /// at that call's time: whether one did.
     fn deliver(&mut self, deadline_us: u64, bell: Option<(&Bell, u64)>) -> bool {
         if self.start.is_none() {
             self.start = self.control.time_map().map(|m| m.wall(0).max(0) as u64);
@@ -48,13 +55,25 @@ impl<F: FnMut(u64, &Control)> Conducted<F> {
         let Some(s) = self.start else {
             return false;
         };
-        while let Some(&t) = self.times.get(self.next) {
-            if s + t > deadline_us {
+        loop {
+            let input = self.times.get(self.next).map(|&t| s + t);
+            let (at, which) = match (input, self.wake) {
+                (Some(i), Some(w)) if w < i => (w, None),
+                (Some(i), _) => (i, Some(self.next)),
+                (None, Some(w)) => (w, None),
+                (None, None) => break,
+            };
+            if at > deadline_us {
                 break;
             }
-            self.inner.advance_to(s + t);
-            (self.apply)(s + t, &self.control);
-            self.next += 1;
+            self.inner.advance_to(at);
+            if which.is_some() {
+                self.next += 1;
+            }
+            // A wake asked for the present or the past, after a wake: not again.
+            self.wake = (self.apply)(at, which, &self.control)
+                .filter(|&w| w > at || which.is_some())
+                .map(|w| w.max(at));
             if bell.is_some_and(|(b, seen)| b.rung() > seen) {
                 return true;
             }
@@ -63,7 +82,7 @@ impl<F: FnMut(u64, &Control)> Conducted<F> {
     }
 }
 
-impl<F: FnMut(u64, &Control)> Clock for Conducted<F> {
+impl<F: FnMut(u64, Option<usize>, &Control) -> Option<u64>> Clock for Conducted<F> {
     fn now_us(&self) -> u64 {
         self.inner.now_us()
     }
@@ -166,9 +185,43 @@ pub struct Run {
     pub sounds: Vec<i64>,
     /// The conductor's tempo as the follower had it after each beat cue, BPM.
     pub bpm: Vec<f64>,
+    /// The conductor's period as the follower had it from each cue or wake on (µs after the
+    /// score's start, µs), in order.
+    pub periods: Vec<(i64, f64)>,
+    /// Each tempo the follower asked against its rate (the factor that plays the score's
+    /// quarter in the follower's period): above 1 pulling the phase forward, below back.
+    pub pulls: Vec<f64>,
 }
 
 impl Run {
+    /// For each note after the first, the conductor's beats (as the follower had the
+    /// conductor's tempo, from note to note) that the performance took to play its quarter:
+    /// 1 when it plays at the follower's rate, less when the phase is pulled forward, more
+    /// when back.
+    pub fn beats_per_quarter(&self) -> Vec<f64> {
+        let period_at = |t: i64| {
+            let i = self.periods.partition_point(|&(p, _)| p <= t);
+            self.periods[i.saturating_sub(1)].1
+        };
+        self.sounds
+            .windows(2)
+            .map(|w| {
+                // The rate changes only at the recorded times: sum over the pieces.
+                let mut cuts: Vec<i64> = self
+                    .periods
+                    .iter()
+                    .map(|&(p, _)| p)
+                    .filter(|&p| p > w[0] && p < w[1])
+                    .collect();
+                cuts.insert(0, w[0]);
+                cuts.push(w[1]);
+                cuts.windows(2)
+                    .map(|c| (c[1] - c[0]) as f64 / period_at(c[0]))
+                    .sum()
+            })
+            .collect()
+    }
+
     /// Note k's sound minus beat k, ms, for every beat with a note.
     pub fn errors_ms(&self, beats: &[u64]) -> Vec<f64> {
         beats
@@ -187,11 +240,32 @@ pub fn conduct(song: &Song, input: &[(u64, Vec<u8>)], via: Via, follow: Follow) 
     let mut follower = Follower::new(ScoreBeats::of(song), follow);
     let (mut osc, mut clock_in) = (OscCues::new(), MidiClock::new());
     let mut bpm = Vec::new();
-    let mut k = 0;
+    let mut periods = Vec::new();
+    let mut pulls = Vec::new();
+    let beats = ScoreBeats::of(song);
+    // The tempo asked against the follower's rate, where the performance stands at `t`.
+    let mut pull =
+        |action: &Action, t: u64, map: Option<orch_perform::TimeMap>, bpm: Option<f64>| {
+            if let (Action::Tempo(f), Some(m), Some(bpm)) = (action, map, bpm) {
+                let len = beats.at(m.score(t as i64)).1;
+                pulls.push(f.get() / (len / (60e6 / bpm)));
+            }
+        };
     let mut clock = Conducted::new(
         &control,
         input.iter().map(|(t, _)| *t).collect(),
-        |t: u64, c: &Control| {
+        |t: u64, k: Option<usize>, c: &Control| {
+            let Some(k) = k else {
+                // Woken with no cue: as the front end's waker does.
+                let map = c.time_map();
+                let action = follower.wake(t, map.as_ref());
+                pull(&action, t, map, follower.bpm());
+                action.apply(c, t);
+                if let Some(p) = follower.bpm() {
+                    periods.push((t, 60e6 / p));
+                }
+                return follower.due();
+            };
             let cues: Vec<Cue> = match via {
                 Via::Osc => osc.packet(t, &input[k].1).unwrap(),
                 Via::Clock => input[k]
@@ -200,16 +274,21 @@ pub fn conduct(song: &Song, input: &[(u64, Vec<u8>)], via: Via, follow: Follow) 
                     .filter_map(|&b| clock_in.feed(t, b))
                     .collect(),
             };
-            k += 1;
             for cue in cues {
-                let action = follower.cue(&Timed { t_us: t, cue }, c.time_map().as_ref());
+                let map = c.time_map();
+                let action = follower.cue(&Timed { t_us: t, cue }, map.as_ref());
+                pull(&action, t, map, follower.bpm());
                 if matches!(cue, Cue::Beat { .. }) {
                     bpm.push(follower.bpm().unwrap_or(f64::NAN));
+                    if let Some(p) = follower.bpm() {
+                        periods.push((t, 60e6 / p));
+                    }
                 }
                 if !matches!(action, Action::Start) {
                     action.apply(c, t);
                 }
             }
+            follower.due()
         },
     );
     let mut live = |_: &orch_perform::Live| {};
@@ -242,5 +321,14 @@ pub fn conduct(song: &Song, input: &[(u64, Vec<u8>)], via: Via, follow: Follow) 
             r.score_at_us + e - start
         })
         .collect();
-    Run { sounds, bpm }
+    let periods = periods
+        .into_iter()
+        .map(|(t, p)| (t as i64 - start, p))
+        .collect();
+    Run {
+        sounds,
+        bpm,
+        periods,
+        pulls,
+    }
 }
