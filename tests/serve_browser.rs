@@ -408,6 +408,12 @@ fn stop_releases_every_key_at_once_on_the_page_and_on_a_udp_output() {
         let chord = "['60','64','67','72'].every(n => document.querySelector(\
                      `[data-testid=\"key-${n}\"]`).dataset.down === 'true')";
         wait_for(&c, "the chord down", &format!("return {chord};")).await;
+        let png = c.screenshot().await.unwrap();
+        std::fs::write(
+            Path::new(env!("CARGO_TARGET_TMPDIR")).join("serve-phone-playing.png"),
+            png,
+        )
+        .unwrap();
         let mut got = Vec::new();
         let mut buf = [0u8; 256];
         let t0 = Instant::now();

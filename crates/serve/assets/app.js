@@ -216,7 +216,7 @@ function render(s) {
   if (p && p.bar !== undefined) {
     $("status").textContent = `${p.paused ? "paused" : "playing"}: ${p.name}`;
     $("bar-beat").textContent = `${p.bar}:${p.beat}`;
-    $("bpm").textContent = `${p.bpm.toFixed(1)} BPM (×${p.tempo.toFixed(2)})`;
+    $("bpm").textContent = `${p.bpm.toFixed(0)} ×${p.tempo.toFixed(2)}`;
     $("notes").textContent = `${p.notes_sent} / ${p.notes}`;
     $("progress").firstElementChild.style.width = `${(p.progress * 100).toFixed(1)}%`;
     const g = p.guard;
@@ -234,6 +234,7 @@ function render(s) {
   if (document.activeElement !== $("tempo")) $("tempo").value = String(s.tempo);
   const q = $("queue");
   q.textContent = "";
+  $("queue-empty").hidden = s.queue.length > 0;
   s.queue.forEach((e, i) => {
     const li = document.createElement("li");
     li.textContent = e.name;
