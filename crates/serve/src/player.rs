@@ -3,8 +3,9 @@
 //! One [`Player`] a server. A play starts an [`orch_stage::session::Session`] on the
 //! configured outputs, and a thread of its own watches it: each snapshot the session tells
 //! (at most 30 a second) becomes the [`state`](Player::state) sent to every viewer; at the
-//! end the session's report is worded by the [`Analyst`](crate::Analyst), kept for the page,
-//! and the queue's next song starts (unless the performance was stopped).
+//! end every robot's report is worded as `orch play` prints it (`orch_stage::text::reports`),
+//! kept for the page with the note-by-note account, and the queue's next song starts (unless
+//! the performance was stopped).
 //!
 //! Commands ([`Command`]) act on the session at once and are acknowledged with the state
 //! once the performance shows them (a pause paused, a tempo taken, a stop ended with every

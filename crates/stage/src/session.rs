@@ -360,7 +360,7 @@ impl Session {
     }
 
     /// Play at tempo factor `factor` (1.0: as written) from now on; a factor out of
-    /// [`TEMPO_RANGE`](crate::setup::TEMPO_RANGE) is refused and changes nothing.
+    /// [`FACTOR_RANGE`](orch_perform::follow::FACTOR_RANGE) is refused and changes nothing.
     pub fn set_tempo(&self, factor: f64) -> Result<Tempo, StageError> {
         let tempo = crate::setup::tempo(factor)?;
         self.control.set_tempo(tempo);
