@@ -104,7 +104,13 @@ fn analyze_json(file: &Path) -> Value {
 
 #[test]
 fn an_upload_is_analysed_as_orch_analyze_says_and_a_malformed_file_changes_nothing() {
-    let s = Served::start(&["--listen", "127.0.0.1:0"]);
+    let library = corpus("bad-empty.mid").parent().unwrap().to_path_buf();
+    let s = Served::start(&[
+        "--listen",
+        "127.0.0.1:0",
+        "--library",
+        library.to_str().unwrap(),
+    ]);
     let driver = Driver::start();
     runtime().block_on(async {
         let c = driver.browser(390, 844).await;
@@ -247,6 +253,32 @@ fn an_upload_is_analysed_as_orch_analyze_says_and_a_malformed_file_changes_nothi
             testid(&c, "song-name").await.text().await.unwrap(),
             name_before
         );
+
+        // A song of the library, picked by name.
+        wait_for(
+            &c,
+            "the library listed",
+            "return document.querySelector('[data-testid=\"library\"] \
+             option[value=\"abc-daramud.mid\"]') !== null;",
+        )
+        .await;
+        c.execute(
+            "const l = document.querySelector('[data-testid=\"library\"]'); \
+             l.value = 'abc-daramud.mid';",
+            vec![],
+        )
+        .await
+        .unwrap();
+        click(&c, "open").await;
+        wait_for(
+            &c,
+            "the library's song",
+            "return document.querySelector('[data-testid=\"song-name\"]').textContent\
+             .startsWith('abc-daramud.mid:');",
+        )
+        .await;
+        let want = analyze_json(&library.join("abc-daramud.mid"));
+        assert_eq!(outcomes(&c).await["on_time"], want["outcomes"]["on_time"]);
         c.close().await.unwrap();
     });
 }

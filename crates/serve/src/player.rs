@@ -189,6 +189,9 @@ pub struct Player {
     library: Option<PathBuf>,
     access: crate::Access,
     inner: Mutex<Inner>,
+    /// One song analysed at a time: uploads wait their turn rather than each holding a
+    /// 16 MiB file's analysis in memory at once.
+    analysing: Mutex<()>,
     states: broadcast::Sender<Arc<str>>,
     closing: watch::Sender<bool>,
 }
@@ -216,6 +219,7 @@ impl Player {
                 seq: 0,
                 ending: false,
             }),
+            analysing: Mutex::new(()),
             states: broadcast::channel(64).0,
             closing: watch::channel(false).0,
         })
@@ -257,6 +261,7 @@ impl Player {
     /// Reads and analyses an uploaded song (on this thread: it takes a while for a long one).
     pub fn load(&self, name: &str, bytes: &[u8]) -> Result<Arc<Loaded>, Reject> {
         let name = clean_name(name);
+        let _turn = self.analysing.lock().unwrap_or_else(|e| e.into_inner());
         let analysis =
             crate::analyze(&self.robot, &self.setup, &name, bytes).map_err(Reject::Bad)?;
         let mut inner = self.lock();
