@@ -300,8 +300,9 @@ async fn key_log(c: &Client) -> Vec<(u64, bool)> {
 fn a_performance_is_drawn_live_in_the_accounts_order_on_two_browsers_and_its_report_ends_it() {
     let s = Served::start(&["--listen", "127.0.0.1:0"]);
     let driver = Driver::start();
-    // 16 quarter notes at 240 BPM (48, 49, … 63), each half a beat long: 4 s.
-    let file = scratch("quarters.mid", &support::quarters_smf(16, 240.0));
+    // 16 quarter notes at 120 BPM (48, 49, … 63), each half a beat long (250 ms down, 250 ms
+    // up: many states each, even on a loaded machine): 8 s.
+    let file = scratch("quarters.mid", &support::quarters_smf(16, 120.0));
     runtime().block_on(async {
         let a = driver.browser(390, 844).await;
         let b = driver.browser(1024, 768).await;
