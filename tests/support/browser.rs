@@ -83,10 +83,37 @@ impl Driver {
 }
 
 impl Drop for Driver {
+    /// Ends chromedriver and the browsers it started (its children: a test that failed before
+    /// closing its session would leave them running, reparented, after chromedriver is gone).
     fn drop(&mut self) {
+        for pid in children(self.child.id()) {
+            let _ = nix::sys::signal::kill(
+                nix::unistd::Pid::from_raw(pid as i32),
+                nix::sys::signal::Signal::SIGTERM,
+            );
+        }
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
+}
+
+/// The processes whose parent is `parent`, from /proc.
+fn children(parent: u32) -> Vec<u32> {
+    let Ok(dir) = std::fs::read_dir("/proc") else {
+        return Vec::new();
+    };
+    dir.filter_map(Result::ok)
+        .filter_map(|e| e.file_name().to_str()?.parse::<u32>().ok())
+        .filter(|pid| {
+            std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|stat| {
+                // After the command's name in parentheses: state, then the parent's id.
+                stat.rfind(')')
+                    .and_then(|i| stat[i + 2..].split_whitespace().nth(1))
+                    .and_then(|p| p.parse::<u32>().ok())
+                    == Some(parent)
+            })
+        })
+        .collect()
 }
 
 pub fn runtime() -> tokio::runtime::Runtime {
