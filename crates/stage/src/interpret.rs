@@ -198,3 +198,60 @@ impl End {
         out
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::writes;
+
+    #[test]
+    fn bytes_arrive_at_wire_speed_and_every_write_says_its_byte() {
+        let mut i = Interpretation::new(Robot::thesis()).unwrap();
+        let mut shown = Vec::new();
+        for b in [0x90, 60, 100, 0x80, 60, 0] {
+            shown.extend(i.push(b).iter().map(writes::text));
+        }
+        assert_eq!(
+            shown,
+            [
+                "      0.640 ms  byte 2      0x22 <- 0x0100  |........#.......|",
+                "      1.600 ms  byte 5      0x22 <- 0x0000  |................|",
+            ]
+        );
+        let end = i.finish();
+        assert_eq!((end.counters.bytes, end.stats.note_ons), (6, 1));
+        assert!(!end.truncated);
+        assert_eq!(end.boards.len(), 4);
+        assert!(end
+            .text()
+            .ends_with("# final: 0x21=0x0000 0x22=0x0000 0x23=0x0000 0x24=0x0000\n"));
+        assert_eq!(
+            end.json()["boards"][1],
+            serde_json::json!({"address": 0x22, "outputs": 0})
+        );
+    }
+
+    #[test]
+    fn a_timer_s_write_comes_at_its_own_time_before_the_next_byte() {
+        // On, off, and on again 36 ms later (Active Sensing fills the time): the guard makes
+        // the key rest its 60 ms from its release first, then strikes it on a timer.
+        let mut i = Interpretation::new(Robot::thesis()).unwrap();
+        let mut bytes = vec![0x90, 60, 127, 0x80, 60, 0];
+        bytes.extend([0xFE; 110]);
+        bytes.extend([0x90, 60, 127]);
+        bytes.extend([0xFE; 200]);
+        let mut all = Vec::new();
+        for b in bytes {
+            all.extend_from_slice(i.push(b));
+        }
+        let strike = all
+            .iter()
+            .find(|w| w.byte.is_none() && w.outputs == 1 << 8)
+            .expect("a timer's strike");
+        assert_eq!(strike.t_us, 1600 + 60_000);
+        assert_eq!(
+            writes::text(strike),
+            "     61.600 ms  timer       0x22 <- 0x0100  |........#.......|"
+        );
+    }
+}

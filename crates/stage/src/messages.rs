@@ -246,3 +246,75 @@ pub fn counters_text(c: &Counters, truncated: bool) -> String {
 pub fn counters_json(c: &Counters, truncated: bool) -> Value {
     json!({"type": "summary", "bytes": c.bytes, "messages": c.messages, "dropped": c.dropped, "abandoned": c.abandoned, "truncated": u8::from(truncated)})
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every message of `bytes` as text, a SysEx's payload written out.
+    fn shown(bytes: &[u8]) -> (Vec<String>, Vec<Value>, Counters) {
+        let mut m = Messages::new();
+        let (mut text, mut json) = (Vec::new(), Vec::new());
+        for &b in bytes {
+            m.push(b, |s| -> io::Result<()> {
+                if let Message::SysEx { len, terminated } = s.message {
+                    let mut t = Vec::new();
+                    write_sysex_text(&mut t, s.sysex, len, terminated)?;
+                    text.push(String::from_utf8(t).unwrap());
+                    let mut j = Vec::new();
+                    write_sysex_json(&mut j, s.sysex, len)?;
+                    json.push(serde_json::from_slice(&j).unwrap());
+                } else if s.message != Message::SysExStart {
+                    text.push(super::text(&s));
+                    json.extend(super::json(&s));
+                }
+                Ok(())
+            })
+            .unwrap();
+        }
+        (text, json, m.finish().0)
+    }
+
+    #[test]
+    fn a_sysex_payload_is_kept_and_each_message_shown_as_text_and_json() {
+        let (text, json, c) = shown(&[0xF0, 1, 2, 0xF7, 0x90, 60, 64, 0xF0, 5, 0x80, 60, 0]);
+        assert_eq!(
+            text,
+            [
+                "System exclusive       F0 01 02 F7  [2 data bytes]",
+                "Note on                 0, note 60, velocity 64",
+                "System exclusive       F0 05 (cut short by a status byte)  [1 data bytes]",
+                "Note off                0, note 60, velocity 0",
+            ]
+        );
+        assert_eq!(json[0], json!({"type": "sysex", "data": [1, 2]}));
+        assert_eq!(
+            json[1],
+            json!({"type": "note_on", "channel": 0, "note": 60, "velocity": 64})
+        );
+        assert_eq!(json[2], json!({"type": "sysex", "data": [5]}));
+        assert_eq!((c.bytes, c.messages), (12, 4));
+        assert_eq!(
+            counters_text(&c, false),
+            "# 12 bytes, 4 messages, 0 dropped, 0 abandoned, 0 truncated"
+        );
+    }
+
+    #[test]
+    fn a_payload_past_what_is_shown_says_its_length() {
+        let mut data = vec![0u8; 10];
+        let mut t = Vec::new();
+        write_sysex_text(&mut t, &data[..3], 10, true).unwrap();
+        assert_eq!(
+            String::from_utf8(t).unwrap(),
+            "System exclusive       F0 00 00 00 ... (7 more not shown) F7  [10 data bytes]"
+        );
+        data.truncate(2);
+        let mut j = Vec::new();
+        write_sysex_json(&mut j, &data, 10).unwrap();
+        assert_eq!(
+            String::from_utf8(j).unwrap(),
+            r#"{"type":"sysex","data":[0,0],"length":10}"#
+        );
+    }
+}
