@@ -445,3 +445,29 @@ fn sigterm_with_a_viewer_watching_a_chord_releases_every_key_and_ends_the_server
         "no All Notes Off at the end: {bytes:02x?}"
     );
 }
+
+#[test]
+fn two_taps_set_the_tempo_they_beat() {
+    let s = Served::start(&["--listen", "127.0.0.1:0"]);
+    let (status, body) = s.request(
+        "POST",
+        "/api/songs?name=long.mid",
+        &["Content-Type: audio/midi"],
+        &support::quarters_smf(64, 120.0),
+    );
+    assert_eq!(status, 200, "{body}");
+    let (status, _) = s.command(r#"{"cmd":"play","song":1}"#);
+    assert_eq!(status, 200);
+    let (status, _) = s.command(r#"{"cmd":"tap"}"#);
+    assert_eq!(status, 200);
+    // 600 ms later: 100 BPM against the 120 written, a factor of 0.83 (the taps are timed as
+    // the server gets them: a loaded machine moves them by some ms).
+    std::thread::sleep(std::time::Duration::from_millis(600));
+    let (status, _) = s.command(r#"{"cmd":"tap"}"#);
+    assert_eq!(status, 200);
+    let state = s.wait_state(30, |st| st["playing"]["tempo"] != 1.0);
+    let tempo = state["playing"]["tempo"].as_f64().unwrap();
+    assert!((0.6..1.05).contains(&tempo), "{state}");
+    let (status, _) = s.command(r#"{"cmd":"stop"}"#);
+    assert_eq!(status, 200);
+}
