@@ -471,3 +471,34 @@ fn two_taps_set_the_tempo_they_beat() {
     let (status, _) = s.command(r#"{"cmd":"stop"}"#);
     assert_eq!(status, 200);
 }
+
+#[test]
+fn a_bad_library_output_or_address_is_refused_at_start_with_exit_2() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let busy = taken.local_addr().unwrap().to_string();
+    for (args, said) in [
+        (
+            vec!["--library", "/nonexistent"],
+            "--library /nonexistent: not a folder",
+        ),
+        (
+            vec!["--out", "serial:/nonexistent/tty"],
+            "--out serial:/nonexistent/tty: cannot open",
+        ),
+        (vec!["--listen", busy.as_str()], "Address already in use"),
+    ] {
+        let mut all = vec!["serve"];
+        if !args.contains(&"--listen") {
+            all.extend(["--listen", "127.0.0.1:0"]);
+        }
+        all.extend(&args);
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_orch"))
+            .args(&all)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(said), "{args:?}: {err}");
+        assert!(out.stdout.is_empty(), "no URL printed: {args:?}");
+    }
+}
