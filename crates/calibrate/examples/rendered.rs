@@ -32,7 +32,9 @@ fn main() {
     );
     println!(
         "font snr_db seed | press_delay max ms | each level's delay median / max ms | \
-         velocity steps median / max | softest wrong | missed | render x real time | analysis s"
+         velocity steps median / max | softest wrong | missed | \
+         median onset error ms, bach-bwv846-prelude on the hidden robot with the written robot.toml | \
+         render x real time | analysis s"
     );
     for (name, font) in [
         ("string", rendered::string_font()),
@@ -66,8 +68,12 @@ fn main() {
                 let out = robot_toml::calibrated(&text, &cal).unwrap();
                 let calibrated = orch_robot::Robot::from_toml(&out).unwrap();
                 let e = errors(&cal, &calibrated, &robot, &hidden.keys, &score);
+                // The calibrated file's compensation, the hidden robot playing: a corpus file.
+                let onset = corpus().map_or(f64::NAN, |song| {
+                    rendered::median_abs(&rendered::onset_errors(&song, &calibrated, &hidden.robot))
+                });
                 println!(
-                    "{name} {snr} {seed} | {:.2} | {:.2} / {:.2} | {:.1} / {:.1} | {:?} | {:?} | {speed:.0} | {secs:.1}",
+                    "{name} {snr} {seed} | {:.2} | {:.2} / {:.2} | {:.1} / {:.1} | {:?} | {:?} | {onset:.2} | {speed:.0} | {secs:.1}",
                     e.press_delay_max_ms,
                     e.delay_median_ms,
                     e.delay_max_ms,
@@ -79,4 +85,11 @@ fn main() {
             }
         }
     }
+}
+
+/// `bach-bwv846-prelude.mid` of the shared corpus, if it is there.
+fn corpus() -> Option<orch_seq::Song> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/midi/bach-bwv846-prelude.mid");
+    orch_seq::Song::parse(&std::fs::read(path).ok()?).ok()
 }

@@ -23,10 +23,12 @@ use std::sync::Arc;
 
 use orch_calibrate::synthetic::{HiddenKey, Rng};
 use orch_calibrate::{Recording, Score};
-use orch_perform::{perform, song_events, Link, MidiRecording, Played, Setup, Tempo};
+use orch_perform::{
+    perform, song_events, Link, MidiRecording, Outcome, Played, ScoreEvent, Setup, Tempo,
+};
 use orch_render::{events, soundfont, synth, Action, KeyEvent, Settings, SoundFont};
 use orch_robot::Robot;
-use orch_seq::{Song, VirtualClock};
+use orch_seq::{Song, VirtualClock, WireBytes};
 
 /// The rate everything is rendered at.
 pub const RATE: u32 = 44_100;
@@ -373,4 +375,87 @@ pub fn convolve(x: &[f64], h: &[f64]) -> Vec<f64> {
     }
     out.truncate(x.len());
     out
+}
+
+/// The signed onset error of a note record, ms.
+fn signed_ms(o: Outcome) -> Option<f64> {
+    match o {
+        Outcome::OnTime { error_us } => Some(error_us as f64 / 1000.0),
+        Outcome::Late { by_us } => Some(by_us as f64 / 1000.0),
+        Outcome::Early { by_us } => Some(-(by_us as f64) / 1000.0),
+        _ => None,
+    }
+}
+
+/// `song` planned with `believed`'s compensation (its robot file) and played by `actual`:
+/// the sends of a performance on `believed`, as they leave for the robot, are what `actual`
+/// receives and plays (as a score without compensation). Each note's onset error on
+/// `actual`, ms, against its score time.
+pub fn onset_errors(song: &Song, believed: &Robot, actual: &Robot) -> Vec<f64> {
+    let mut sends = MidiRecording::default();
+    let planned = perform(
+        &setup(believed, true),
+        orch_perform::song_events(song),
+        song.notes(),
+        Some(&mut sends),
+        &mut VirtualClock::new(),
+        None,
+        None,
+    )
+    .unwrap();
+    // The sends, running status undone, from 1 s on (the first may precede the song).
+    let t0 = sends.sent.first().map_or(0, |s| s.0);
+    let mut status = 0u8;
+    let mut events = Vec::new();
+    let mut notes = 0;
+    for (t, bytes) in &sends.sent {
+        let mut m = bytes.clone();
+        if m[0] < 0x80 {
+            m.insert(0, status);
+        } else if m[0] < 0xF0 {
+            status = m[0];
+        }
+        let b = WireBytes::new(&m);
+        notes += usize::from(b.note_on().is_some());
+        events.push(ScoreEvent {
+            score_us: t - t0 + 1_000_000,
+            bytes: b,
+        });
+    }
+    let played = perform::<_, MidiRecording>(
+        &setup(actual, false),
+        events.into_iter(),
+        notes,
+        None,
+        &mut VirtualClock::new(),
+        None,
+        None,
+    )
+    .unwrap();
+    // Each note of the second performance is a send of the first: (its send time, note) finds
+    // the score note it was.
+    let score_of: std::collections::HashMap<(u64, u8), i64> = planned
+        .records
+        .iter()
+        .filter_map(|r| Some(((r.sent_us()?, r.note), r.score_at_us)))
+        .collect();
+    played
+        .records
+        .iter()
+        .filter_map(|r| {
+            let sounded = r.score_at_us as f64 + signed_ms(r.outcome)? * 1000.0;
+            let sent = (r.score_at_us - played.start_us as i64 - 1_000_000 + t0 as i64) as u64;
+            let score = *score_of.get(&(sent, r.note))?;
+            // On the first performance's clock.
+            let sounded = sounded - played.start_us as f64 - 1e6 + t0 as f64;
+            Some((sounded - score as f64) / 1000.0)
+        })
+        .collect()
+}
+
+/// The median of the magnitudes.
+pub fn median_abs(x: &[f64]) -> f64 {
+    let mut a: Vec<f64> = x.iter().map(|v| v.abs()).collect();
+    a.sort_by(f64::total_cmp);
+    a[a.len() / 2]
 }
