@@ -70,7 +70,11 @@ fn main() {
                 let e = errors(&cal, &calibrated, &robot, &hidden.keys, &score);
                 // The calibrated file's compensation, the hidden robot playing: a corpus file.
                 let onset = corpus().map_or(f64::NAN, |song| {
-                    rendered::median_abs(&rendered::onset_errors(&song, &calibrated, &hidden.robot))
+                    rendered::median_abs(&rendered::onset_errors(
+                        &song,
+                        &calibrated,
+                        &hidden.robot.mechanics,
+                    ))
                 });
                 println!(
                     "{name} {snr} {seed} | {:.2} | {:.2} / {:.2} | {:.1} / {:.1} | {:?} | {:?} | {onset:.2} | {speed:.0} | {secs:.1}",

@@ -114,9 +114,10 @@ fn the_calibrated_robot_toml_puts_the_hidden_robots_onsets_on_time() {
         let bytes = std::fs::read(corpus.join(file))
             .unwrap_or_else(|e| panic!("{file} of the shared corpus (../shared/midi): {e}"));
         let song = Song::parse(&bytes).unwrap();
-        let with_calibrated = onset_errors(&song, &calibrated, &hidden.robot);
-        let with_input = onset_errors(&song, &input, &hidden.robot);
-        let with_truth = onset_errors(&song, &hidden.robot, &hidden.robot);
+        let keys = &hidden.robot.mechanics;
+        let with_calibrated = onset_errors(&song, &calibrated, keys);
+        let with_input = onset_errors(&song, &input, keys);
+        let with_truth = onset_errors(&song, &hidden.robot, keys);
         assert!(with_calibrated.len() * 10 >= song.notes() * 9, "{file}");
         let (c, i, t) = (
             median_abs(&with_calibrated),

@@ -387,11 +387,17 @@ fn signed_ms(o: Outcome) -> Option<f64> {
     }
 }
 
-/// `song` planned with `believed`'s compensation (its robot file) and played by `actual`:
-/// the sends of a performance on `believed`, as they leave for the robot, are what `actual`
-/// receives and plays (as a score without compensation). Each note's onset error on
-/// `actual`, ms, against its score time.
-pub fn onset_errors(song: &Song, believed: &Robot, actual: &Robot) -> Vec<f64> {
+/// `song` played with the robot file `file` by a robot whose keys move as `mechanics` says:
+/// the sends of a performance on `file` (its compensation, from its mechanics), as they
+/// leave for the robot, are what the robot receives and plays as a score without
+/// compensation (its interpreter set up by `file`: the velocity curves are the file's, the
+/// keys' motion is `mechanics`'). Each note's onset error, ms, against its score time.
+pub fn onset_errors(song: &Song, file: &Robot, mechanics: &orch_sim::MechanicsConfig) -> Vec<f64> {
+    let believed = file;
+    let actual = &Robot {
+        mechanics: mechanics.clone(),
+        ..file.clone()
+    };
     let mut sends = MidiRecording::default();
     let planned = perform(
         &setup(believed, true),
