@@ -46,12 +46,15 @@
 //!   each key's frames before its strikes for the key), so it rises with the room's noise;
 //!   listening on the key's partials alone gains about 15 dB over the whole band. A strike
 //!   whose partials do not rise clearly above the noise in their own bins counts as silence;
-//!   at 30 dB SNR that is about 55 dB below the key's full-power level (velocity-scale
-//!   loudness about 10).
+//!   at 30 dB SNR that is about 55 dB below the key's full-power level (the virtual robot's
+//!   softest sound is −36 dB). The sharp timing needs the strike's high-passed energy 15 dB
+//!   above the noise's; a softer strike is timed on the envelope and its key's offset.
 //! - **Reverberation**: the detection function only counts rises, and each strike has a
 //!   second to itself (the damper stops the string 175 ms after the press; the room's tail
 //!   has died 60 dB in 0.6 s); an echo's ripple in the flux is ignored under 15 % of the
-//!   onset's peak.
+//!   onset's peak. The direct sound comes first, so the sharp timing's rise is the direct
+//!   sound's; the partials' envelope crossing moves with the early reflections (±2 ms at a
+//!   direct-to-reverberant ratio of 0 dB), which is why it only guides the sharp timing.
 //! - **A mechanical thump before the string**: a click of a few ms spreads its energy over
 //!   the whole spectrum, so the partials' narrow bands, on whose envelope the onset is first
 //!   timed, get little of it next to the string's; its flux peak, a frame or less before the

@@ -56,7 +56,7 @@ pub fn string_font() -> Arc<SoundFont> {
 pub fn string_sample() -> Vec<i16> {
     let rate = f64::from(RATE);
     let f0 = 261.625_565;
-    let mut rng = Rng::new(0x57_121_46);
+    let mut rng = Rng::new(0x0571_2146);
     let partials: Vec<(f64, f64, f64, f64)> = (1..=10)
         .map(|h| {
             let h = f64::from(h);
@@ -308,7 +308,7 @@ pub fn record(
     if x.len() < want {
         x.resize(want, 0.0);
     }
-    let mut rng = Rng::new(room.seed ^ 0xA0D1_0);
+    let mut rng = Rng::new(room.seed ^ 0x000A_0D10);
     if let Some((rt60, drr)) = room.reverb {
         x = convolve(&x, &impulse_response(rt60, drr, &mut rng));
     }
