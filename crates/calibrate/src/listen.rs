@@ -385,11 +385,11 @@ fn refine(x: &[f32], rate: u32, note: u8, t: f64) -> Option<(f64, f64)> {
     let pre = crate::onset::median(&mut pre);
     let mut post: Vec<f64> = (at(t + 2.0)..at(t + 20.0)).map(e).collect();
     let post = crate::onset::median(&mut post);
-    if post <= pre || pre <= 0.0 {
+    if post <= pre {
         return None;
     }
     let rise = pre + SHARP_FRACTION * (post - pre);
-    // From the first sample past half in [t - 12, t + 12], back to the crossing.
+    // The first sample past the rise in [t - 12, t + 12], and the crossing just before it.
     let lo = at(t - 12.0);
     let hi = at(t + 12.0);
     // Already risen at the window's start (a click before the string, another sound): no
@@ -399,6 +399,7 @@ fn refine(x: &[f32], rate: u32, note: u8, t: f64) -> Option<(f64, f64)> {
     let frac = if b > a { (rise - a) / (b - a) } else { 0.0 };
     Some((
         (from as f64 + first as f64 - 1.0 + frac) / per_ms,
+        // Infinite in digital silence.
         post / pre,
     ))
 }
