@@ -60,11 +60,10 @@
 //!   timed, get little of it next to the string's; its flux peak, a frame or less before the
 //!   string's, merges with it into one onset (the merge is what the thump test guards: with
 //!   it shortened to 5 ms the thump becomes a second onset). The sharp timing is broadband
-//!   and would take the thump: it is not taken when the energy had already risen at the
-//!   start of its search window or when it lies more than 0.4 periods plus 5 ms from the
-//!   envelope's onset (the thump test's comes 12 ms early); a thump closer to the string
-//!   than that is taken for the onset (the press delay is then the thump's). The thump is
-//!   not measured.
+//!   and could take the thump: its rise must last 5 ms (a click's falls back), must not
+//!   have begun before its search window, and must lie within 0.4 periods plus 15 ms of the
+//!   envelope's onset. A thump that runs into the string without falling back is taken for
+//!   the onset (the press delay is then the thump's). The thump is not measured.
 //! - **A neighbour's decay still ringing**: keys are struck in order, a second apart, each
 //!   key's own noise frames (from 450 to 150 ms before each strike) hold whatever still
 //!   rings, so its threshold and string-power baseline include it; the timing crosses

@@ -39,10 +39,11 @@
 //!   rises a fifth of the way from its level before (median of 50 to 15 ms before) to its
 //!   level after (median of 2 to 20 ms after), within ±12 ms. Broadband, it has no band's
 //!   kernel to smear the step: the onset of the upper partials (and the hammer's click) is
-//!   there within a window's fraction. It is taken when the energy rose at least 30 times
-//!   (15 dB), the rise did not begin before the search window (a thump or another sound
-//!   already there) and it lies within 0.4 of the key's periods plus 5 ms of the coarse
-//!   onset. A strike for which it is not taken (soft, in noise) is timed on the envelope,
+//!   there within a window's fraction. The rise must last 5 ms (a click's falls back). It
+//!   is taken when the energy rose at least 30 times (15 dB), the rise did not begin before
+//!   the search window (a thump or another sound already there) and it lies within 0.4 of
+//!   the key's periods plus 15 ms of the coarse onset (in a reverberant room the envelope's
+//!   crossing can come 7 ms late: the early reflections keep its partials rising). A strike for which it is not taken (soft, in noise) is timed on the envelope,
 //!   moved by the key's own offset between the two timings (the median over its strikes
 //!   where both were taken): the key's strikes are the same string, so the envelope's bias
 //!   is the same.
@@ -269,8 +270,9 @@ struct Timing {
 
 /// The sharp timing is taken within this many of the key's periods ...
 const NEAR_PERIODS: f64 = 0.4;
-/// ... and this many ms of the envelope's.
-const NEAR_MS: f64 = 5.0;
+/// ... and this many ms of the envelope's (5 ms left a key whose envelope came 7 ms late in
+/// a reverberant room on the envelope, and every other key 7 ms off when it was the anchor).
+const NEAR_MS: f64 = 15.0;
 /// The high-passed energy must rise this many times (15 dB) for its timing to be taken.
 const SHARP_RATIO: f64 = 30.0;
 /// The sharp timing's high-pass: at this partial of the key ...
@@ -279,6 +281,8 @@ const SHARP_PARTIAL: f64 = 4.0;
 const SHARP_MIN_HZ: f64 = 200.0;
 /// The sharp timing's energy window, ms (centred).
 const SHARP_WINDOW_MS: f64 = 3.0;
+/// The sharp onset's rise must last this long, ms.
+const SHARP_SUSTAIN_MS: f64 = 5.0;
 /// The sharp onset: where the energy has risen this share of the way to its level after.
 const SHARP_FRACTION: f64 = 0.2;
 
@@ -394,7 +398,11 @@ fn refine(x: &[f32], rate: u32, note: u8, t: f64) -> Option<(f64, f64)> {
     let hi = at(t + 12.0);
     // Already risen at the window's start (a click before the string, another sound): no
     // timing of its own.
-    let first = (lo..hi).find(|&i| e(i) > rise).filter(|&i| i > lo)?;
+    // A rise that falls back within SHARP_SUSTAIN_MS (a thump before the string) is not it.
+    let sustain = (SHARP_SUSTAIN_MS * per_ms).round() as usize;
+    let first = (lo..hi)
+        .find(|&i| (i..(i + sustain).min(sq.len())).all(|j| e(j) > rise))
+        .filter(|&i| i > lo)?;
     let (a, b) = (e(first - 1), e(first));
     let frac = if b > a { (rise - a) / (b - a) } else { 0.0 };
     Some((
