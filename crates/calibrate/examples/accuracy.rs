@@ -6,7 +6,7 @@
 use orch_calibrate::synthetic::{clear_of_floor, errors, hidden_robot, record, Room};
 use orch_calibrate::{analyze, robot_toml, Anchor, Score};
 
-/// Levels fainter than this (velocity scale; -41 dB against full power) are kept out of the
+/// Levels fainter than this (velocity scale; -27 dB against full power) are kept out of the
 /// hidden robots: see `clear_of_floor`.
 const FLOOR: f64 = 12.0;
 

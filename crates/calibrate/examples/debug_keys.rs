@@ -1,4 +1,6 @@
 //! Per-key detail of one synthetic calibration (for development).
+//!
+//! `cargo run --release -p orch-calibrate --example debug_keys [SNR] [rev|dry] [SEED]`
 use orch_calibrate::synthetic::{duty, hidden_robot, record, Room};
 use orch_calibrate::{analyze, Anchor, Score};
 
@@ -11,14 +13,18 @@ fn main() {
     let text = orch_robot::default_toml(orch_robot::BoardKind::Pwm);
     let robot = orch_robot::Robot::from_toml(&text).unwrap();
     let score = Score::for_robot(&robot, 4).unwrap();
-    let keys = hidden_robot(36, 96, (0.40, 0.75), 0);
+    let seed: u64 = std::env::args()
+        .nth(3)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0);
+    let keys = hidden_robot(36, 96, (0.40, 0.75), seed);
     let room = Room {
         rate: 44_100,
         capture_offset_ms: 1234.5,
         snr_db: Some(snr),
         reverb,
         thump: false,
-        seed: 0,
+        seed,
     };
     let rec = record(&score, &robot, &keys, &room);
     let anchor = Anchor {

@@ -4,8 +4,9 @@
 //! a strike at duty `d` sounds if `d ≥ softest`; its press delay is `press_delay` at full
 //! power and `soft_press_delay` at `softest`, linear in the duty between; its loudness on the
 //! velocity scale is `1 + 126 (d − softest) / (1 − softest)`. Loudness and sound level are
-//! tied by MIDI's own convention (the DLS and SoundFont default velocity curve): a velocity
-//! `v` sounds `40 log10(v / 127)` dB against 127, so amplitude goes as velocity squared.
+//! tied as the virtual robot sounds them (`orch render`, [`db_of_loudness`]): loudness 1..=127
+//! plays as synthesizer velocity 16..=127, heard at `40 log10(velocity / 127)` dB (the
+//! SoundFont convention), a 36 dB range.
 //!
 //! - **softest**: between the loudest level that made no sound and the softest that did;
 //!   within that bracket, the duty whose loudness curve best fits the measured levels (least
@@ -45,9 +46,17 @@ pub fn loudness(d: f64, s: f64) -> f64 {
     1.0 + 126.0 * (d - s) / (1.0 - s)
 }
 
-/// The level in dB, against full power, of a velocity-scale loudness.
+/// The synthesizer velocity the virtual robot's loudness 1 sounds at (`orch-render`'s
+/// `SOFTEST_VELOCITY`): loudness 1..=127 plays as velocity 16..=127.
+pub const SOFTEST_SOUND_VELOCITY: f64 = 16.0;
+
+/// The level in dB, against full power, of a velocity-scale loudness: the virtual robot's
+/// sound (`orch render`), loudness `v` played as velocity `u = 16 + 111 (v − 1) / 126` and
+/// heard at `40 log10(u / 127)` dB (the SoundFont convention: amplitude as velocity
+/// squared), so from −36 dB at loudness 1 to 0 at 127: about a piano's range.
 pub fn db_of_loudness(v: f64) -> f64 {
-    40.0 * (v / 127.0).log10()
+    let u = SOFTEST_SOUND_VELOCITY + (127.0 - SOFTEST_SOUND_VELOCITY) * (v - 1.0) / 126.0;
+    40.0 * (u.max(1e-9) / 127.0).log10()
 }
 
 /// Fits a key. `file_slope_ms` is `soft_press_delay − press_delay` in the robot file.

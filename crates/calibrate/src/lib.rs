@@ -32,25 +32,38 @@
 //! must also raise the key's *string power* (the partials' power less the power between
 //! them) well above its noise. The onset is timed on the partials' analytic envelopes
 //! (each partial's band through a zero-phase filter: no phase ripple), where their sum
-//! crosses half-way to its peak; the level is the string power over the 50 ms after it.
-//! Every parameter, and why, is in the `listen` and `envelope` modules' source notes.
+//! crosses half-way to its peak, then refined on the recording's high-passed energy (the
+//! key's 4th partial up, 3 ms windows): where it has risen a fifth of the way to its level
+//! after the onset. The partials' bands cannot time an abrupt onset closer than a part of
+//! the key's period (the onset's click spreads over each band); the broadband energy can, to
+//! a fraction of its window. A strike too soft for the energy to rise clearly (15 dB) is
+//! timed on the envelope moved by the key's own offset between the two (from its louder
+//! strikes). The level is the string power over the 50 ms after the onset. Every parameter,
+//! and why, is in the `listen` and `envelope` modules' source notes.
 //!
 //! # Real rooms
 //! - **Noise**: every threshold is set from the noise (the recording's flux for the figure;
 //!   each key's frames before its strikes for the key), so it rises with the room's noise;
 //!   listening on the key's partials alone gains about 15 dB over the whole band. A strike
 //!   whose partials do not rise clearly above the noise in their own bins counts as silence;
-//!   at 30 dB SNR that is about 55 dB below the key's full-power level (velocity-scale
-//!   loudness about 10).
+//!   at 30 dB SNR that is about 55 dB below the key's full-power level (the virtual robot's
+//!   softest sound is −36 dB). The sharp timing needs the strike's high-passed energy 15 dB
+//!   above the noise's; a softer strike is timed on the envelope and its key's offset.
 //! - **Reverberation**: the detection function only counts rises, and each strike has a
 //!   second to itself (the damper stops the string 175 ms after the press; the room's tail
 //!   has died 60 dB in 0.6 s); an echo's ripple in the flux is ignored under 15 % of the
-//!   onset's peak.
+//!   onset's peak. The direct sound comes first, so the sharp timing's rise is the direct
+//!   sound's; the partials' envelope crossing moves with the early reflections (±2 ms at a
+//!   direct-to-reverberant ratio of 0 dB), which is why it only guides the sharp timing.
 //! - **A mechanical thump before the string**: a click of a few ms spreads its energy over
-//!   the whole spectrum, so the partials' narrow bands, on whose envelope the onset is timed,
-//!   get little of it next to the string's; its flux peak, a frame or less before the
+//!   the whole spectrum, so the partials' narrow bands, on whose envelope the onset is first
+//!   timed, get little of it next to the string's; its flux peak, a frame or less before the
 //!   string's, merges with it into one onset (the merge is what the thump test guards: with
-//!   it shortened to 5 ms the thump becomes a second onset). The thump is not measured.
+//!   it shortened to 5 ms the thump becomes a second onset). The sharp timing is broadband
+//!   and could take the thump: its rise must last 5 ms (a click's falls back), must not
+//!   have begun before its search window, and must lie within 0.4 periods plus 15 ms of the
+//!   envelope's onset. A thump that runs into the string without falling back is taken for
+//!   the onset (the press delay is then the thump's). The thump is not measured.
 //! - **A neighbour's decay still ringing**: keys are struck in order, a second apart, each
 //!   key's own noise frames (from 450 to 150 ms before each strike) hold whatever still
 //!   rings, so its threshold and string-power baseline include it; the timing crosses
@@ -58,13 +71,22 @@
 //!
 //! # The fit
 //! The model is the virtual robot's (see [`fit`]): sound at or above `softest`, press delay
-//! and velocity-scale loudness linear in the duty, and loudness `v` heard as `40 log10(v /
-//! 127)` dB (MIDI's DLS/SoundFont convention), each key against its own full-power level.
+//! and velocity-scale loudness linear in the duty, and loudness heard as `orch render`
+//! plays it (loudness 1..=127 as synthesizer velocity 16..=127, `40 log10(velocity / 127)`
+//! dB: −36 to 0 dB), each key against its own full-power level.
+//!
+//! - **The sound's attack**: the onset is where the sound rises, so a key whose sound rises
+//!   slowly (a sampled bass note, a soundfont's quiet pre-roll) is timed later than its first
+//!   sample by its attack: the press delay measured is to the audible onset, which is what
+//!   compensation needs.
 //!
 //! # Synthetic recordings
 //! [`synthetic`] makes recordings of the score by a robot with hidden figures, in a room
 //! with noise, reverberation and a capture offset: the tests and the accuracy figures
-//! (`cargo run --release -p orch-calibrate --example accuracy`) use it.
+//! (`cargo run --release -p orch-calibrate --example accuracy`) use it. The proof on
+//! *rendered* sound (the virtual robot with hidden per-key mechanics playing the score,
+//! `orch-render` making it sound) is in the crate's tests (`tests/rendered.rs`) and
+//! `cargo run --release -p orch-calibrate --example rendered`.
 //!
 //! # Recording live
 //! With the `mic` feature, the `mic` module records from an ALSA capture device and `live`

@@ -26,10 +26,27 @@
 //!   and cancel). An onset counts only if the string power after it rises by at least 8
 //!   robust standard deviations of the noise frames' string power, and to at least 1.5 times
 //!   what it was before: a noise burst or a ripple in a decay does not.
-//! - **Timing**: first where the string power crosses half-way from its level before to its
-//!   peak (±a few ms: a short-time power ripples with the partials' phases), then, near it,
-//!   where the partials' analytic envelope does ([`Demod`]): exact for a step whatever the
-//!   loudness; the common bias (half-way up an attack) cancels against the anchor.
+//! - **Timing, coarse**: first where the string power crosses half-way from its level before
+//!   to its peak (±a few ms: a short-time power ripples with the partials' phases), then,
+//!   near it, where the partials' analytic envelope does ([`Demod`]): exact for a step of a
+//!   lone partial whatever the loudness, but an abrupt onset puts a click into every
+//!   partial's band (each partial's step, and its negative-frequency image, spread over the
+//!   band), which moves the crossing by a part of the key's period: about −0.2 periods on the
+//!   test font's string, ±2 ms in a reverberant room, up to 3 ms early in the bass.
+//! - **Timing, sharp** ([`refine`]): the recording high-passed at the key's 4th partial (200
+//!   Hz at least; zero-phase, so it moves nothing), its energy over a centred 3 ms window,
+//!   from 60 ms before the coarse onset to 40 ms after; the onset is where that energy first
+//!   rises a fifth of the way from its level before (median of 50 to 15 ms before) to its
+//!   level after (median of 2 to 20 ms after), within ±12 ms. Broadband, it has no band's
+//!   kernel to smear the step: the onset of the upper partials (and the hammer's click) is
+//!   there within a window's fraction. The rise must last 5 ms (a click's falls back). It
+//!   is taken when the energy rose at least 30 times (15 dB), the rise did not begin before
+//!   the search window (a thump or another sound already there) and it lies within 0.4 of
+//!   the key's periods plus 15 ms of the coarse onset (in a reverberant room the envelope's
+//!   crossing can come 7 ms late: the early reflections keep its partials rising). A strike for which it is not taken (soft, in noise) is timed on the envelope,
+//!   moved by the key's own offset between the two timings (the median over its strikes
+//!   where both were taken): the key's strikes are the same string, so the envelope's bias
+//!   is the same.
 //! - **Level**: the mean string power of the frames that lie wholly in the 50 ms after the
 //!   onset, in dB (mean-square power; 0 dB is a full-scale square wave).
 
@@ -45,6 +62,10 @@ const FLUX_LAMBDA: f64 = 6.0;
 const STRING_LAMBDA: f64 = 8.0;
 /// A peak this share of the window's largest, or more, is an onset of its own.
 const RIPPLE: f64 = 0.15;
+/// The level is the string power over this long after the onset, ms (100 ms averaged a soft
+/// strike's noise down on rendered recordings, but let the synthetic strings' faster-decaying
+/// upper partials bias it: no better on the whole).
+const LEVEL_MS: usize = 50;
 /// Listening window around the expected onset, ms.
 pub(crate) const BEFORE_MS: i64 = 150;
 /// Listening window after the expected onset, ms.
@@ -62,6 +83,7 @@ pub(crate) struct Heard {
 /// Listens for `note`'s strikes expected at `expected_ms` (recording time).
 pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec<Heard> {
     let band = KeyBand::new(note, rate);
+    let f0 = 440.0 * 2f64.powf((f64::from(note) - 69.0) / 12.0);
     let mut stft = Stft::new(band.n);
     let mut demod = Demod::new(note, rate);
     let mut p = Vec::new();
@@ -103,7 +125,7 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
 
     let half_ms = band.n as f64 / 2.0 / per_ms;
     let merge_ms = (2.0 * half_ms).max(50.0);
-    expected_ms
+    let mut heard: Vec<(Heard, Vec<Timing>)> = expected_ms
         .iter()
         .map(|&e| {
             // Frames every 1 ms from e - BEFORE - LAG to e + AFTER + frame.
@@ -159,6 +181,7 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
             kept.sort_unstable();
             let hm = half_ms.round() as usize;
             let mut onsets_ms = Vec::new();
+            let mut timings = Vec::new();
             let mut level_db = None;
             for i in kept {
                 // The string's power before the onset (frames wholly before it) and its peak.
@@ -185,23 +208,83 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
                 let (a, b) = (string[j - 1], string[j]);
                 let frac = if b > a { (half - a) / (b - a) } else { 0.0 };
                 let t_half = t_of(j - 1) + frac.clamp(0.0, 1.0);
-                let t = time_onset(&env, env_k, env_t, t_half).unwrap_or(t_half);
+                let t_env = time_onset(&env, env_k, env_t, t_half).unwrap_or(t_half);
+                let sharp = refine(x, rate, note, t_env);
+                // The sharp timing must lie near the envelope's: within the envelope's own
+                // spread (a part of the key's period, and what a reverberant room adds).
+                let near = NEAR_PERIODS * 1000.0 / f0 + NEAR_MS;
+                let sharp = sharp.filter(|&(t, _)| (t - t_env).abs() <= near);
+                let t = match sharp {
+                    Some((t, ratio)) if ratio >= SHARP_RATIO => t,
+                    _ => t_env,
+                };
+                timings.push(Timing { t_env, sharp });
                 if level_db.is_none() {
                     let from = (t + half_ms).ceil() as usize;
                     let lo = ((from as f64 - start).max(0.0)) as usize;
-                    let hi = (lo + 50).min(count);
+                    let hi = (lo + LEVEL_MS).min(count);
                     let mean = string[lo..hi].iter().sum::<f64>() / (hi - lo).max(1) as f64;
                     level_db = Some(10.0 * mean.max(1e-20).log10());
                 }
                 onsets_ms.push(t);
             }
-            Heard {
-                onsets_ms,
-                level_db,
-            }
+            (
+                Heard {
+                    onsets_ms,
+                    level_db,
+                },
+                timings,
+            )
         })
-        .collect()
+        .collect();
+    // The envelope's offset from the sharp timing, from the key's clear strikes, for the
+    // others.
+    let mut offsets: Vec<f64> = heard
+        .iter()
+        .flat_map(|(_, ts)| ts.iter())
+        .filter_map(|t| match t.sharp {
+            Some((s, ratio)) if ratio >= SHARP_RATIO => Some(s - t.t_env),
+            _ => None,
+        })
+        .collect();
+    if !offsets.is_empty() {
+        let offset = median(&mut offsets);
+        for (h, ts) in &mut heard {
+            for (o, t) in h.onsets_ms.iter_mut().zip(ts.iter()) {
+                if !matches!(t.sharp, Some((_, r)) if r >= SHARP_RATIO) {
+                    *o = t.t_env + offset;
+                }
+            }
+        }
+    }
+    heard.into_iter().map(|(h, _)| h).collect()
 }
+
+/// How one onset was timed.
+struct Timing {
+    /// On the partials' envelope.
+    t_env: f64,
+    /// On the high-passed energy, with its rise (after over before).
+    sharp: Option<(f64, f64)>,
+}
+
+/// The sharp timing is taken within this many of the key's periods ...
+const NEAR_PERIODS: f64 = 0.4;
+/// ... and this many ms of the envelope's (5 ms left a key whose envelope came 7 ms late in
+/// a reverberant room on the envelope, and every other key 7 ms off when it was the anchor).
+const NEAR_MS: f64 = 15.0;
+/// The high-passed energy must rise this many times (15 dB) for its timing to be taken.
+const SHARP_RATIO: f64 = 30.0;
+/// The sharp timing's high-pass: at this partial of the key ...
+const SHARP_PARTIAL: f64 = 4.0;
+/// ... and at least this, Hz.
+const SHARP_MIN_HZ: f64 = 200.0;
+/// The sharp timing's energy window, ms (centred).
+const SHARP_WINDOW_MS: f64 = 3.0;
+/// The sharp onset's rise must last this long, ms.
+const SHARP_SUSTAIN_MS: f64 = 5.0;
+/// The sharp onset: where the energy has risen this share of the way to its level after.
+const SHARP_FRACTION: f64 = 0.2;
 
 /// The onset on the envelope near `guess` (ms): where it crosses half-way from its level
 /// before (the median 150 to 60 ms before `guess`) to its peak (within 10 ms before to 60 ms
@@ -235,4 +318,96 @@ fn time_onset(
     let (a, b) = (env[k - 1], env[k]);
     let frac = if b > a { (half - a) / (b - a) } else { 0.0 };
     Some(t_of(k - 1) + frac.clamp(0.0, 1.0) * (t_of(k) - t_of(k - 1)))
+}
+
+/// A second-order Butterworth high-pass (RBJ), run forward then backward: zero phase.
+fn highpass_zero_phase(x: &mut [f64], rate: f64, fc: f64) {
+    let w = 2.0 * std::f64::consts::PI * fc / rate;
+    let (sn, cs) = w.sin_cos();
+    let alpha = sn / (2.0 * std::f64::consts::FRAC_1_SQRT_2);
+    let a0 = 1.0 + alpha;
+    let b = [
+        (1.0 + cs) / 2.0 / a0,
+        -(1.0 + cs) / a0,
+        (1.0 + cs) / 2.0 / a0,
+    ];
+    let a = [-2.0 * cs / a0, (1.0 - alpha) / a0];
+    let pass = |x: &mut [f64]| {
+        let (mut x1, mut x2, mut y1, mut y2) = (0.0, 0.0, 0.0, 0.0);
+        for v in x.iter_mut() {
+            let y = b[0] * *v + b[1] * x1 + b[2] * x2 - a[0] * y1 - a[1] * y2;
+            x2 = x1;
+            x1 = *v;
+            y2 = y1;
+            y1 = y;
+            *v = y;
+        }
+    };
+    pass(x);
+    x.reverse();
+    pass(x);
+    x.reverse();
+}
+
+/// The onset near `t` (ms, the envelope's) timed on the recording's high-passed energy:
+/// 60 ms before to 40 ms after `t`, high-passed at the key's 4th partial (200 Hz at least)
+/// by a zero-phase filter, its energy over a centred 3 ms window; its level before (the
+/// median from 50 to 15 ms before `t`) and after (from 2 to 20 ms after); the onset where it
+/// first rises a fifth of the way from one to the other within ±12 ms of `t`. Returns the
+/// onset and how many times the energy rose (`None` if it did not).
+fn refine(x: &[f32], rate: u32, note: u8, t: f64) -> Option<(f64, f64)> {
+    let per_ms = f64::from(rate) / 1000.0;
+    let f0 = 440.0 * 2f64.powf((f64::from(note) - 69.0) / 12.0);
+    let from = ((t - 60.0) * per_ms).round() as i64;
+    let to = ((t + 40.0) * per_ms).round() as i64;
+    if from < 0 || to as usize > x.len() {
+        return None;
+    }
+    let mut y: Vec<f64> = x[from as usize..to as usize]
+        .iter()
+        .map(|&v| f64::from(v))
+        .collect();
+    highpass_zero_phase(
+        &mut y,
+        f64::from(rate),
+        (SHARP_PARTIAL * f0).max(SHARP_MIN_HZ),
+    );
+    let half_w = ((SHARP_WINDOW_MS * per_ms) / 2.0).round() as usize;
+    // Energy, centred moving average.
+    let sq: Vec<f64> = y.iter().map(|v| v * v).collect();
+    let mut cum = vec![0.0; sq.len() + 1];
+    for (i, v) in sq.iter().enumerate() {
+        cum[i + 1] = cum[i] + v;
+    }
+    let e = |i: usize| {
+        let a = i.saturating_sub(half_w);
+        let b = (i + half_w + 1).min(sq.len());
+        (cum[b] - cum[a]) / (b - a) as f64
+    };
+    let at = |ms: f64| ((ms - (from as f64 / per_ms)) * per_ms).round() as usize;
+    let mut pre: Vec<f64> = (at(t - 50.0)..at(t - 15.0)).map(e).collect();
+    let pre = crate::onset::median(&mut pre);
+    let mut post: Vec<f64> = (at(t + 2.0)..at(t + 20.0)).map(e).collect();
+    let post = crate::onset::median(&mut post);
+    if post <= pre {
+        return None;
+    }
+    let rise = pre + SHARP_FRACTION * (post - pre);
+    // The first sample past the rise in [t - 12, t + 12], and the crossing just before it.
+    let lo = at(t - 12.0);
+    let hi = at(t + 12.0);
+    // Already risen at the window's start (a click before the string, another sound): no
+    // timing of its own.
+    // A rise that falls back within SHARP_SUSTAIN_MS (a thump before the string) is not it.
+    let sustain = (SHARP_SUSTAIN_MS * per_ms).round() as usize;
+    let first = (lo..hi)
+        .find(|&i| (i..(i + sustain).min(sq.len())).all(|j| e(j) > rise))
+        .filter(|&i| i > lo)?;
+    let (a, b) = (e(first - 1), e(first));
+    let frac = if b > a { (rise - a) / (b - a) } else { 0.0 };
+    Some((
+        (from as f64 + first as f64 - 1.0 + frac) / per_ms,
+        // Infinite in digital silence.
+        post / pre,
+    ))
 }

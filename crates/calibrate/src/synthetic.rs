@@ -4,8 +4,9 @@
 //! - **The keys** ([`HiddenKey`]): a press delay at full power and at the softest duty, a
 //!   softest duty below which the key makes no sound, a gain (how loud the microphone hears
 //!   it at full power). A strike at duty `d ≥ softest` sounds at the virtual robot's
-//!   loudness `v = 1 + 126 (d − softest) / (1 − softest)`, with an amplitude `gain · (v /
-//!   127)²` (40 log10 of velocity in dB, MIDI's convention), after the virtual robot's press
+//!   loudness `v = 1 + 126 (d − softest) / (1 − softest)`, at `gain` times the level the
+//!   virtual robot sounds it at ([`db_of_loudness`](crate::fit::db_of_loudness): −36 dB at
+//!   loudness 1), after the virtual robot's press
 //!   delay (linear in the duty).
 //! - **The string**: 10 partials `h f0 √(1 + B h²)` (B = 10⁻⁴), amplitudes `1/h`, random
 //!   phases, each decaying with a time constant from 1.2 s (C2) to about 0.3 s (C7),
@@ -129,7 +130,7 @@ pub fn hidden_robot(low: u8, high: u8, softest: (f64, f64), seed: u64) -> Vec<Hi
 }
 
 /// Moves each key's softest duty just above any level of the score that would sound
-/// fainter than `floor` on the velocity scale (40 log10(floor / 127) dB against the key's
+/// fainter than `floor` on the velocity scale ([`db_of_loudness`](crate::fit::db_of_loudness) against the key's
 /// full power): such a strike is under the noise of a real room, and no method can tell it
 /// from silence (the accuracy example measures where that floor lies).
 pub fn clear_of_floor(
@@ -224,7 +225,7 @@ pub fn record_strikes(
             continue;
         }
         let onset_ms = f64::from(s.at_ms) + room.capture_offset_ms + k.delay_at(d);
-        let amp = k.gain * (k.loudness_at(d) / 127.0).powi(2);
+        let amp = k.gain * 10f64.powf(crate::fit::db_of_loudness(k.loudness_at(d)) / 20.0);
         let f0 = 440.0 * 2f64.powf((f64::from(s.note) - 69.0) / 12.0);
         let tau0 = 1.2 * 2f64.powf(-(f64::from(s.note) - 36.0) / 30.0);
         let start = onset_ms / 1000.0 * rate;

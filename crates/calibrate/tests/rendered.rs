@@ -1,0 +1,145 @@
+//! The proof on rendered sound: the virtual robot, its per-key press delays and loudness
+//! curves hidden from the calibrator, plays the calibration score without compensation;
+//! `orch-render` makes it sound; a room adds a capture offset, reverberation and noise; the
+//! calibration recovers the hidden figures, names a key that never sounds, and its robot.toml
+//! puts the hidden robot's onsets on time in corpus files.
+
+mod support;
+
+use orch_calibrate::synthetic::errors;
+use orch_calibrate::{analyze, robot_toml, Anchor, Calibration, Score};
+use orch_robot::Robot;
+use orch_seq::Song;
+use support::rendered::{self, median_abs, onset_errors, Hidden, Room};
+
+fn pwm_text() -> String {
+    orch_robot::default_toml(orch_robot::BoardKind::Pwm)
+}
+
+/// The room of the issue: a capture offset, a reverberant room (0.6 s, as much reverberant
+/// energy as direct), noise at 30 dB SNR.
+fn room(seed: u64) -> Room {
+    Room {
+        capture_offset_ms: 1712.3,
+        reverb: Some((0.6, 0.0)),
+        snr_db: Some(30.0),
+        seed,
+    }
+}
+
+fn calibrate(text: &str, hidden: &Hidden, silent: Option<u8>, anchor_note: u8) -> Calibration {
+    let robot = Robot::from_toml(text).unwrap();
+    let score = Score::for_robot(&robot, 4).unwrap();
+    let rec = rendered::record(&score, hidden, &rendered::string_font(), &room(3), silent);
+    let low = robot.config.range.low().get();
+    let anchor = Anchor {
+        note: anchor_note,
+        press_delay_ms: hidden.keys[usize::from(anchor_note - low)].press_delay_ms,
+    };
+    analyze(&rec, &robot, &score, Some(anchor)).unwrap()
+}
+
+/// The 61-key robot's hidden figures and its calibration, made once for the tests that use
+/// them.
+fn full_robot() -> &'static (Hidden, Calibration) {
+    static FULL: std::sync::OnceLock<(Hidden, Calibration)> = std::sync::OnceLock::new();
+    FULL.get_or_init(|| {
+        let hidden = rendered::hidden(&pwm_text(), (0.40, 0.75), 5);
+        let cal = calibrate(&pwm_text(), &hidden, None, 60);
+        (hidden, cal)
+    })
+}
+
+#[test]
+fn calibration_on_rendered_sound_recovers_hidden_delays_curves_and_softest() {
+    let text = pwm_text();
+    let robot = Robot::from_toml(&text).unwrap();
+    let score = Score::for_robot(&robot, 4).unwrap();
+    let (hidden, cal) = full_robot();
+    // The capture offset holds the method's common bias, which the anchor takes out.
+    assert!(
+        (cal.capture_offset_ms - room(3).offset_ms()).abs() < 5.0,
+        "{}",
+        cal.capture_offset_ms
+    );
+    assert!(
+        cal.keys.iter().all(|k| k
+            .problems
+            .iter()
+            .all(|p| p.contains("below the key's softest"))),
+        "{:?}",
+        cal.keys_with_problems().collect::<Vec<_>>()
+    );
+    let out = robot_toml::calibrated(&text, cal).unwrap();
+    let calibrated = Robot::from_toml(&out).unwrap();
+    let e = errors(cal, &calibrated, &robot, &hidden.keys, &score);
+    assert!(e.missed.is_empty(), "keys missed: {:?}", e.missed);
+    assert!(
+        e.softest_wrong.is_empty(),
+        "softest wrong: {:?}",
+        e.softest_wrong
+    );
+    // Every key's press delay within 1 ms; each strike's within 1.5 ms (1.05 at most in the
+    // figures' rooms).
+    assert!(e.press_delay_max_ms <= 1.0, "{e:?}");
+    assert!(e.delay_max_ms <= 1.5, "{e:?}");
+    // The velocity curves: the median key within 2 steps (the worst: README, "What remains").
+    assert!(e.velocity_median_steps <= 2.0, "{e:?}");
+}
+
+#[test]
+fn a_key_that_never_sounds_on_rendered_sound_is_named() {
+    // One PCA9685 board, notes 60..=71; key 64's strikes make no sound.
+    let text =
+        "[keys]\nlow = 60\nhigh = 71\n[[boards]]\nkind = \"pca9685\"\naddress = 0x40\nkeys = 12\n";
+    let hidden = rendered::hidden(text, (0.40, 0.75), 8);
+    let cal = calibrate(text, &hidden, Some(64), 60);
+    let dead = cal.keys.iter().find(|k| k.note == 64).unwrap();
+    assert!(dead.fit.is_none(), "{dead:?}");
+    assert!(
+        dead.problems[0].contains("no sound at any level"),
+        "{:?}",
+        dead.problems
+    );
+    let named: Vec<u8> = cal
+        .keys
+        .iter()
+        .filter(|k| k.fit.is_none())
+        .map(|k| k.note)
+        .collect();
+    assert_eq!(named, [64]);
+    let out = robot_toml::calibrated(text, &cal).unwrap();
+    assert!(out.contains("# note 64: no sound at any level"), "{out}");
+}
+
+#[test]
+fn the_calibrated_robot_toml_puts_the_hidden_robots_onsets_on_time() {
+    let text = pwm_text();
+    let input = Robot::from_toml(&text).unwrap();
+    let (hidden, cal) = full_robot();
+    let out = robot_toml::calibrated(&text, cal).unwrap();
+    let calibrated = Robot::from_toml(&out).unwrap();
+    let corpus = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/midi");
+    for file in ["bach-bwv846-prelude.mid", "bach-invention-01.mid"] {
+        let bytes = std::fs::read(corpus.join(file))
+            .unwrap_or_else(|e| panic!("{file} of the shared corpus (../shared/midi): {e}"));
+        let song = Song::parse(&bytes).unwrap();
+        let keys = &hidden.robot.mechanics;
+        let with_calibrated = onset_errors(&song, &calibrated, keys);
+        let with_input = onset_errors(&song, &input, keys);
+        let with_truth = onset_errors(&song, &hidden.robot, keys);
+        assert!(with_calibrated.len() * 10 >= song.notes() * 9, "{file}");
+        let (c, i, t) = (
+            median_abs(&with_calibrated),
+            median_abs(&with_input),
+            median_abs(&with_truth),
+        );
+        assert!(
+            c <= 1.0,
+            "{file}: median onset error {c:.2} ms with the calibrated robot.toml \
+             ({i:.2} with the uncalibrated one, {t:.2} with the hidden figures)"
+        );
+        // What the calibration is for: the uncalibrated file is far off.
+        assert!(i > 3.0, "{file}: {i:.2} ms uncalibrated");
+    }
+}
