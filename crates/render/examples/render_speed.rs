@@ -2,7 +2,7 @@
 //! thesis robot and rendered through the installed soundfont (the performance and the
 //! synthesis timed apart), and the score itself.
 //!
-//! `cargo run --release -p orch-render --example speed [FILE.mid] [SF2]`
+//! `cargo run --release -p orch-render --example render_speed [FILE.mid] [SF2]`
 //! (default: `../shared/midi/bach-bwv846-prelude.mid` from the repository, the soundfont
 //! `orch render` would choose).
 
