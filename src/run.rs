@@ -12,14 +12,15 @@ use std::sync::mpsc::{self, Sender};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use orch_io::{InTarget, MidiIn, OutSpec, Target};
+use orch_io::{InTarget, MidiIn, OutSpec};
 use orch_stage::run::{counters, end_state, End, Event, Loop, Said};
+use orch_stage::session::Snapshot;
 use orch_stage::thru::Thru;
 use orch_stage::writes;
-use orch_stage::{BoardWrite, LiveBoards, LiveError, LiveRobot};
+use orch_stage::{BoardWrite, LiveBoards, LiveRobot};
 
 use crate::cli::RunArgs;
-use crate::error::bad_input;
+use crate::error::{bad_input, live as live_err};
 use crate::view::{Scene, View};
 
 /// Forwards SIGINT, SIGTERM, SIGHUP and SIGUSR1 into the loop's channel; a signal that stops
@@ -51,14 +52,6 @@ fn forward_signals(
     Ok(handle)
 }
 
-/// A live robot's error as the binary says it: bad input exits 2.
-fn live_err(e: LiveError) -> anyhow::Error {
-    match e {
-        LiveError::BadInput(m) => bad_input(m),
-        e => anyhow::Error::new(e),
-    }
-}
-
 /// What the loop says, on standard error, headed by what it is about.
 fn say(said: Said, input: &str) {
     match said {
@@ -74,10 +67,13 @@ fn scene(live: &LiveRobot, title: &str) -> Scene {
     Scene {
         command: "orch run",
         title: title.to_string(),
-        low_note: live.interpreter().config().range.low().get(),
-        down: live.keys_down(),
-        elapsed_s: live.elapsed_s(),
-        notes_sent: live.totals().note_ons,
+        now: Snapshot {
+            low_note: live.interpreter().config().range.low().get(),
+            keys_down: live.keys_down(),
+            elapsed_s: live.elapsed_s(),
+            notes_sent: live.totals().note_ons,
+            ..Snapshot::default()
+        },
         ..Scene::default()
     }
 }
@@ -100,21 +96,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     crate::live::init_logging(args.verbose);
     let input = InTarget::parse(&args.input).map_err(|e| bad_input(e.to_string()))?;
     let out_spec = OutSpec::parse(&args.out).map_err(|e| bad_input(e.to_string()))?;
-    let thru_specs: Vec<OutSpec> = args
-        .thru
-        .iter()
-        .map(|t| {
-            OutSpec::parse(t).map_err(|e| bad_input(e.to_string().replacen("--out", "--thru", 1)))
-        })
-        .collect::<anyhow::Result<_>>()?;
-    for t in &thru_specs {
-        if matches!(t.target, Target::Sim | Target::I2c(_)) {
-            return Err(bad_input(format!(
-                "--thru {}: --thru takes MIDI outputs (serial:, rawmidi:, udp:); the robot is --out",
-                t.text
-            )));
-        }
-    }
+    let thru_specs = orch_stage::thru::specs(&args.thru).map_err(live_err)?;
     let robot = orch_stage::load_robot(args.robot.as_deref())?;
     robot.interpreter()?;
     let out = LiveBoards::open(&out_spec, &robot).map_err(live_err)?;

@@ -14,6 +14,7 @@
 //!   and a performance on the virtual clock, as fast as the machine goes.
 //! - [`bars`]: bars as people count them, where each begins (for a jump there), and a bar
 //!   typed a digit at a time.
+//! - [`signals`]: SIGINT, SIGTERM and SIGHUP as a flag that stops a live front end.
 //!
 //! Playing it, live or on the virtual clock:
 //!
@@ -83,6 +84,7 @@ pub mod report;
 pub mod run;
 pub mod session;
 pub mod setup;
+pub mod signals;
 pub mod sources;
 pub mod text;
 pub mod thru;
