@@ -8,7 +8,7 @@
 
 use std::io::{BufWriter, IsTerminal, Write};
 use std::sync::atomic::{AtomicI32, Ordering};
-use std::sync::mpsc::{self, Sender};
+use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -22,35 +22,6 @@ use orch_stage::{BoardWrite, LiveBoards, LiveRobot};
 use crate::cli::RunArgs;
 use crate::error::{bad_input, live as live_err};
 use crate::view::{Scene, View};
-
-/// Forwards SIGINT, SIGTERM, SIGHUP and SIGUSR1 into the loop's channel; a signal that stops
-/// it is kept in `stopped_by`.
-fn forward_signals(
-    tx: Sender<Event>,
-    stopped_by: Arc<AtomicI32>,
-) -> anyhow::Result<signal_hook::iterator::Handle> {
-    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM, SIGUSR1};
-    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP, SIGUSR1])?;
-    let handle = signals.handle();
-    std::thread::Builder::new()
-        .name("orch-signals".into())
-        .spawn(move || {
-            for s in signals.forever() {
-                let event = match s {
-                    SIGHUP => Event::Reload,
-                    SIGUSR1 => Event::Counters,
-                    _ => {
-                        stopped_by.store(s, Ordering::SeqCst);
-                        Event::Stop
-                    }
-                };
-                if tx.send(event).is_err() {
-                    return;
-                }
-            }
-        })?;
-    Ok(handle)
-}
 
 /// What the loop says, on standard error, headed by what it is about.
 fn say(said: Said, input: &str) {
@@ -109,7 +80,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
 
     let (tx, rx) = mpsc::channel::<Event>();
     let stopped_by = Arc::new(AtomicI32::new(0));
-    let signals = forward_signals(tx.clone(), Arc::clone(&stopped_by))?;
+    let signals = orch_stage::signals::forward(tx.clone(), Arc::clone(&stopped_by))?;
     let midi_in =
         MidiIn::open(&input, tx).map_err(|e| bad_input(format!("--in {}: {e}", args.input)))?;
     tracing::debug!(input = midi_in.name(), "reading");

@@ -80,12 +80,7 @@ pub fn analyze(robot: &Robot, setup: &Setup, name: &str, bytes: &[u8]) -> Result
     let svg = orch_stage::analysis::roll_svg(&song, robot, &played, setup.tempo, name)
         .map_err(|e| words(&e))?;
     let text = orch_stage::text::analysis(&analysis, std::path::Path::new(name));
-    // `orch analyze --json`: the report's fields and the notes that went wrong (the findings
-    // are its text's).
-    let mut json = serde_json::to_value(&analysis).map_err(|e| e.to_string())?;
-    if let Some(map) = json.as_object_mut() {
-        map.remove("findings");
-    }
+    let json = analysis.json().map_err(|e| e.to_string())?;
     Ok(Analysis {
         song,
         json,
