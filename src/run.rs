@@ -6,18 +6,18 @@
 //! The live robot and its loop are `orch-stage`'s ([`LiveRobot`], [`orch_stage::run`]); here:
 //! the arguments, the signals, the messages, the JSON log and the live view.
 
-use std::io::{BufWriter, IsTerminal, Write};
+use std::io::{BufWriter, IsTerminal};
 use std::sync::atomic::{AtomicI32, Ordering};
 use std::sync::mpsc;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 
 use orch_io::{InTarget, MidiIn, OutSpec};
 use orch_stage::run::{counters, end_state, End, Event, Loop, Said};
 use orch_stage::session::Snapshot;
 use orch_stage::thru::Thru;
-use orch_stage::writes;
-use orch_stage::{BoardWrite, LiveBoards, LiveRobot};
+use orch_stage::writes::JsonLog;
+use orch_stage::{LiveBoards, LiveRobot};
 
 use crate::cli::RunArgs;
 use crate::error::{bad_input, live as live_err};
@@ -49,19 +49,6 @@ fn scene(live: &LiveRobot, title: &str) -> Scene {
     }
 }
 
-/// The JSON log on standard output, shared with the live robot's write log.
-type Log = Arc<Mutex<BufWriter<std::io::Stdout>>>;
-
-/// Flushes the log; a log whose standard output has gone (a closed pipe) is dropped: the
-/// robot plays on without it.
-fn flush_log(json: &mut Option<Log>) {
-    if let Some(w) = json {
-        if w.lock().unwrap_or_else(|e| e.into_inner()).flush().is_err() {
-            *json = None;
-        }
-    }
-}
-
 /// `orch run`.
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     crate::live::init_logging(args.verbose);
@@ -85,16 +72,9 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         MidiIn::open(&input, tx).map_err(|e| bad_input(format!("--in {}: {e}", args.input)))?;
     tracing::debug!(input = midi_in.name(), "reading");
 
-    let mut json: Option<Log> = args
-        .json
-        .then(|| Arc::new(Mutex::new(BufWriter::new(std::io::stdout()))));
-    let log = json.clone().map(|w| {
-        Box::new(move |write: &BoardWrite| {
-            let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
-            // Standard output gone (a closed pipe): the robot plays on without the log.
-            let _ = writeln!(w, "{}", writes::json(write));
-        }) as Box<dyn FnMut(&BoardWrite) + Send>
-    });
+    // The JSON log on standard output, shared with the live robot's write log.
+    let mut json = JsonLog::to(args.json.then(|| BufWriter::new(std::io::stdout())));
+    let log = json.sink();
     let din = matches!(input, InTarget::Serial(_));
     let mut live = LiveRobot::new(robot, out, thru, din, log).map_err(live_err)?;
     let priority = orch_perform::realtime::raise_priority();
@@ -106,7 +86,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         // least (lost I2C boards are tried again).
         let every = Duration::from_millis(if view.is_some() { 33 } else { 200 });
         let mut after = |live: &LiveRobot| {
-            flush_log(&mut json);
+            json.flush();
             let v = view.as_mut()?;
             if crate::view::quit_requested() {
                 return Some(End::Quit);
@@ -127,11 +107,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     signals.close();
 
     let stopped = live.stop().map_err(live_err);
-    if let Some(w) = &json {
-        let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
-        let _ = writeln!(w, "{}", writes::final_json(&end_state(&live)));
-    }
-    flush_log(&mut json);
+    json.finish(&end_state(&live));
     if args.verbose {
         eprintln!("orch run: {}", counters(&live));
     }
