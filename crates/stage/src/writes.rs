@@ -93,7 +93,7 @@ pub fn duty_text(duties: &[Duty; 16]) -> String {
     }
 }
 
-/// The live robot's board writes as JSON lines ([`json`]) on a writer it shares with the
+/// The live robot's board writes as JSON lines ([`json()`]) on a writer it shares with the
 /// robot's loop (`orch run --json`): each write as it is made ([`sink`](Self::sink)), the
 /// boards' state at the end ([`finish`](Self::finish)). A writer that fails to flush
 /// (standard output gone: a closed pipe) is let go: the robot plays on without its log.
