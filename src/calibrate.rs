@@ -4,31 +4,17 @@
 //! printing.
 
 use std::io::Write;
-use std::path::Path;
 
 use anyhow::Context;
 use orch_calibrate::{analyze, robot_toml, Anchor, CalibrateError, Calibration, Recording, Score};
 
 use crate::cli::CalibrateArgs;
 use crate::error::bad_input;
-use crate::robot::{Robot, DEFAULT_TOML};
+use crate::robot::Robot;
 
 /// The user's input at fault (a score, a recording, an anchor) exits 2, anything else 1.
 fn input_error(e: CalibrateError) -> anyhow::Error {
     crate::error::lift(e, CalibrateError::is_bad_input)
-}
-
-/// The robot and its file's text (the default robot's when none is given).
-fn robot(path: Option<&Path>) -> anyhow::Result<(Robot, String)> {
-    match path {
-        Some(p) => {
-            let robot = Robot::load(p)?;
-            let text =
-                std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
-            Ok((robot, text))
-        }
-        None => Ok((Robot::thesis(), DEFAULT_TOML.to_string())),
-    }
 }
 
 /// The measurements as JSON: `orch_calibrate::Calibration`'s own (the figures rounded to
@@ -39,7 +25,7 @@ pub fn json(cal: &Calibration) -> serde_json::Value {
 
 /// Runs `orch calibrate`.
 pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
-    let (robot, text) = robot(args.robot.as_deref())?;
+    let (robot, text) = orch_stage::load::load_robot_text(args.robot.as_deref())?;
     let score = Score::for_robot(&robot, args.levels).map_err(input_error)?;
     if let Some(path) = &args.score {
         std::fs::write(path, score.to_smf())

@@ -9,7 +9,8 @@
 //! A song and a robot:
 //!
 //! - [`load`]: a Standard MIDI File read and checked ([`load_song`]: its first bytes before
-//!   the rest, its size capped) and the robot ([`load_robot`]: robot.toml, or the thesis's).
+//!   the rest, its size capped) and the robot ([`load_robot`]: robot.toml, or the thesis's;
+//!   [`load::load_robot_text`] with its text, for a calibrated copy).
 //! - [`setup`]: how a robot plays (the performance's `Setup`), the tempo factors allowed,
 //!   and a performance on the virtual clock, as fast as the machine goes.
 //! - [`bars`]: bars as people count them, where each begins (for a jump there), and a bar
