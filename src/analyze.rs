@@ -36,13 +36,7 @@ pub fn run(args: &AnalyzeArgs) -> anyhow::Result<()> {
     }
     let mut out = std::io::stdout().lock();
     if args.json {
-        // `orch analyze --json` has the report's fields and the notes that went wrong; the
-        // findings are its text's.
-        let mut value = serde_json::to_value(&analysis)?;
-        if let Some(map) = value.as_object_mut() {
-            map.remove("findings");
-        }
-        writeln!(out, "{value}")?;
+        writeln!(out, "{}", analysis.json()?)?;
     } else {
         write!(out, "{}", text::analysis(&analysis, &args.file))?;
     }

@@ -4,34 +4,17 @@
 //! printing.
 
 use std::io::Write;
-use std::path::Path;
 
 use anyhow::Context;
 use orch_calibrate::{analyze, robot_toml, Anchor, CalibrateError, Calibration, Recording, Score};
 
 use crate::cli::CalibrateArgs;
 use crate::error::bad_input;
-use crate::robot::{Robot, DEFAULT_TOML};
+use crate::robot::Robot;
 
+/// The user's input at fault (a score, a recording, an anchor) exits 2, anything else 1.
 fn input_error(e: CalibrateError) -> anyhow::Error {
-    if e.is_bad_input() {
-        bad_input(e.to_string())
-    } else {
-        anyhow::Error::new(e)
-    }
-}
-
-/// The robot and its file's text (the default robot's when none is given).
-fn robot(path: Option<&Path>) -> anyhow::Result<(Robot, String)> {
-    match path {
-        Some(p) => {
-            let robot = Robot::load(p)?;
-            let text =
-                std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
-            Ok((robot, text))
-        }
-        None => Ok((Robot::thesis(), DEFAULT_TOML.to_string())),
-    }
+    crate::error::lift(e, CalibrateError::is_bad_input)
 }
 
 /// The measurements as JSON: `orch_calibrate::Calibration`'s own (the figures rounded to
@@ -42,7 +25,7 @@ pub fn json(cal: &Calibration) -> serde_json::Value {
 
 /// Runs `orch calibrate`.
 pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
-    let (robot, text) = robot(args.robot.as_deref())?;
+    let (robot, text) = orch_stage::load::load_robot_text(args.robot.as_deref())?;
     let score = Score::for_robot(&robot, args.levels).map_err(input_error)?;
     if let Some(path) = &args.score {
         std::fs::write(path, score.to_smf())
@@ -76,7 +59,7 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
                 .with_context(|| path.display().to_string())?;
             (rec, path.display().to_string())
         }
-        (None, Some(device)) => (live::record(args, device, &robot, &score)?, device.clone()),
+        (None, Some(device)) => (record(args, device, &robot, &score)?, device.clone()),
         (None, None) => unreachable!("clap requires --score, --wav or --mic"),
     };
     let cal = analyze(&rec, &robot, &score, anchor)
@@ -112,92 +95,51 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `--mic`: the score played on `--out` and recorded at once (orch-calibrate's `live`).
+/// `--mic`: the score played on `--out` and recorded at once (orch-calibrate's `live`);
+/// SIGINT, SIGTERM and SIGHUP stop the robot (every key released) and the recording.
 #[cfg(feature = "mic")]
-mod live {
-    use std::sync::atomic::AtomicBool;
-    use std::sync::Arc;
-
-    use anyhow::Context;
-    use orch_calibrate::live::{take, TakeError};
-    use orch_calibrate::mic::Mic;
-    use orch_calibrate::{Recording, Score};
-
-    use crate::cli::CalibrateArgs;
-    use crate::error::bad_input;
-    use crate::robot::Robot;
-
-    pub fn record(
-        args: &CalibrateArgs,
-        device: &str,
-        robot: &Robot,
-        score: &Score,
-    ) -> anyhow::Result<Recording> {
-        let out = args.out.as_deref().expect("clap requires --out with --mic");
-        let out = orch_io::OutSpec::parse(out).map_err(|e| bad_input(e.to_string()))?;
-        // Created before the take, so that a path that cannot be written does not lose it.
-        let keep = match &args.keep {
-            Some(path) => Some((
-                path,
-                std::fs::File::create(path)
-                    .map_err(|e| bad_input(format!("--keep {}: {e}", path.display())))?,
-            )),
-            None => None,
-        };
-        let mic = Mic::open(device).map_err(|e| bad_input(e.to_string()))?;
-        // SIGINT, SIGTERM and SIGHUP stop the robot (every key released) and the recording.
-        let stop = Arc::new(AtomicBool::new(false));
-        for sig in [
-            signal_hook::consts::SIGINT,
-            signal_hook::consts::SIGTERM,
-            signal_hook::consts::SIGHUP,
-        ] {
-            signal_hook::flag::register(sig, Arc::clone(&stop))?;
-        }
-        let ms = score.length_ms();
-        eprintln!(
-            "orch: playing the calibration score on --out {} and recording it from --mic \
-             {device} ({}): {} min {} s",
-            out.text,
-            mic.format(),
-            ms / 60_000,
-            ms % 60_000 / 1000
-        );
-        let take = take(robot, score, out, mic, &stop).map_err(|e| match e {
-            TakeError::Output(m) => bad_input(m),
-            e => anyhow::Error::new(e),
-        })?;
-        for w in take.warnings() {
-            eprintln!("orch: warning: {w}");
-        }
-        if let Some((path, file)) = keep {
-            take.recording
-                .write(std::io::BufWriter::new(file))
-                .with_context(|| format!("--keep {}", path.display()))?;
-        }
-        Ok(take.recording)
+fn record(
+    args: &CalibrateArgs,
+    device: &str,
+    robot: &Robot,
+    score: &Score,
+) -> anyhow::Result<Recording> {
+    use orch_calibrate::live::{output, take, Keep, TakeError};
+    let lift = |e| crate::error::lift(e, TakeError::is_bad_input);
+    let out = output(args.out.as_deref().expect("clap requires --out with --mic")).map_err(lift)?;
+    let keep = args
+        .keep
+        .as_deref()
+        .map(Keep::create)
+        .transpose()
+        .map_err(lift)?;
+    let mic = orch_calibrate::mic::Mic::open(device).map_err(|e| bad_input(e.to_string()))?;
+    let stop = orch_stage::signals::stop_flag()?;
+    let ms = score.length_ms();
+    eprintln!(
+        "orch: playing the calibration score on --out {} and recording it from --mic \
+         {device} ({}): {} min {} s",
+        out.text,
+        mic.format(),
+        ms / 60_000,
+        ms % 60_000 / 1000
+    );
+    let take = take(robot, score, out, mic, &stop).map_err(lift)?;
+    for w in take.warnings() {
+        eprintln!("orch: warning: {w}");
     }
+    if let Some(keep) = keep {
+        keep.write(&take.recording).map_err(lift)?;
+    }
+    Ok(take.recording)
 }
 
 /// `--mic` without the `mic` feature: said so, with how to build it.
 #[cfg(not(feature = "mic"))]
-mod live {
-    use orch_calibrate::{Recording, Score};
-
-    use crate::cli::CalibrateArgs;
-    use crate::error::bad_input;
-    use crate::robot::Robot;
-
-    pub fn record(
-        _args: &CalibrateArgs,
-        device: &str,
-        _robot: &Robot,
-        _score: &Score,
-    ) -> anyhow::Result<Recording> {
-        Err(bad_input(format!(
-            "--mic {device}: this orch was built without the `mic` feature (live capture \
-             through ALSA); build it with `cargo build --release --features mic` (needs \
-             libasound2-dev), or record the score yourself and give the recording with --wav"
-        )))
-    }
+fn record(_: &CalibrateArgs, device: &str, _: &Robot, _: &Score) -> anyhow::Result<Recording> {
+    Err(bad_input(format!(
+        "--mic {device}: this orch was built without the `mic` feature (live capture \
+         through ALSA); build it with `cargo build --release --features mic` (needs \
+         libasound2-dev), or record the score yourself and give the recording with --wav"
+    )))
 }

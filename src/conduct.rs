@@ -6,17 +6,14 @@
 //! cues into tempo changes of the performance, through the performance's `Control`. Here: the
 //! arguments, the view, the report.
 
-use std::sync::mpsc;
-use std::sync::{Arc, Mutex};
-use std::time::Instant;
-
-use orch_perform::{Control, Follow, Follower, ScoreBeats, Tempo};
-use orch_stage::sources::{source_name, SourceSpec, Stamp, Status};
+use orch_perform::{Follow, Tempo};
+use orch_stage::conductor::Conducting;
+use orch_stage::sources::SourceSpec;
 use orch_stage::SourceError;
 
 use crate::cli::{ConductArgs, FollowMode};
 use crate::error::bad_input;
-use crate::live::{self, Conductor, LiveOptions};
+use crate::live::{self, LiveOptions};
 use crate::play;
 
 /// Runs `orch conduct`.
@@ -35,31 +32,14 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
     let robot = orch_stage::load_robot(args.robot.as_deref())?;
     let setup = orch_stage::setup::setup(&robot, !args.no_compensation, Tempo::NORMAL);
     let lanes = play::open_lanes(play::out_specs(&args.outs)?, &setup)?;
-    let follow_mode = match args.follow {
+    let mode = match args.follow {
         FollowMode::Immediate => Follow::Immediate,
         FollowMode::Phase => Follow::PHASE,
     };
-    let follower = Follower::new(ScoreBeats::of(&song), follow_mode);
-    // A conductor's change rings the control's bell: the performer wakes and takes it at once.
-    let control = Control::new();
-    let origin = Instant::now();
-    let stamp = Stamp(origin);
-    let (tap_tx, tap_rx) = mpsc::channel();
-    let status = Arc::new(Mutex::new(Status::default()));
-    let taps = tap.then_some(tap_rx);
-    orch_stage::conductor::start(&spec, follower, &control, stamp, taps, &status).map_err(|e| {
-        match e {
-            SourceError::BadInput(m) => bad_input(format!("--source {m}")),
-            e => anyhow::Error::new(e),
-        }
+    let conducting = Conducting::start(&spec, &song, mode).map_err(|e| match e {
+        SourceError::BadInput(m) => bad_input(format!("--source {m}")),
+        e => anyhow::Error::new(e),
     })?;
-    let name = source_name(&spec);
-    let status_line = || status.lock().unwrap_or_else(|e| e.into_inner()).line(&name);
-    let mut on_key = |c: char| {
-        if tap && c != 'q' {
-            let _ = tap_tx.send(stamp.now_us());
-        }
-    };
     let played = live::play_live(
         song,
         lanes,
@@ -68,16 +48,11 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
             from_us,
             view: !args.no_view,
             file: &args.file,
-            conductor: Some(Conductor {
-                control: Arc::clone(&control),
-                origin,
-                status: &status_line,
-                on_key: &mut on_key,
-            }),
+            conductor: Some(&conducting),
         },
     )?;
     if !args.json {
-        println!("{}", status_line());
+        println!("{}", conducting.line());
     }
     play::print_reports(&played, args.json, &args.file, !args.outs.is_empty())
 }

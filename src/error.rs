@@ -19,6 +19,25 @@ pub fn bad_input(message: impl Into<String>) -> anyhow::Error {
     anyhow::Error::new(BadInput(message.into()))
 }
 
+/// A library's error as the binary says it: bad input (exit 2, in its own words) when
+/// `is_bad_input` says the user's input is at fault, else as it is (exit 1, with what is
+/// behind it).
+pub fn lift<E>(e: E, is_bad_input: impl FnOnce(&E) -> bool) -> anyhow::Error
+where
+    E: std::error::Error + Send + Sync + 'static,
+{
+    if is_bad_input(&e) {
+        bad_input(e.to_string())
+    } else {
+        anyhow::Error::new(e)
+    }
+}
+
+/// A live robot's or output's error ([`lift`]).
+pub fn live(e: orch_stage::LiveError) -> anyhow::Error {
+    lift(e, orch_stage::LiveError::is_bad_input)
+}
+
 /// 2 for bad input anywhere in the chain (a [`BadInput`], a robot configuration that was
 /// refused: [`orch_robot::RobotError`], or a song, bar or tempo refused:
 /// [`orch_stage::StageError`], hex text that is not: [`orch_stage::bytes::ReadError`]), 1

@@ -5,14 +5,15 @@
 
 use std::io::IsTerminal;
 use std::path::Path;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::Duration;
 
 use orch_perform::Control;
 use orch_seq::Song;
 use orch_stage::bars;
-use orch_stage::session::{Ended, Lane, Session, SessionFailure, Snapshot};
+use orch_stage::conductor::Conducting;
+use orch_stage::session::{Ended, Lane, Session, SessionFailure};
 use orch_stage::watch::{self, WatchError};
 
 use crate::view::{Key, Scene, View};
@@ -27,20 +28,10 @@ pub(crate) struct LiveOptions<'a> {
     pub view: bool,
     /// The file played (its name is the view's title).
     pub file: &'a Path,
-    /// A conductor (`orch conduct`), steering the performance through its own control.
-    pub conductor: Option<Conductor<'a>>,
-}
-
-/// A conductor steering a live performance.
-pub(crate) struct Conductor<'a> {
-    /// The control the conductor steers; the performance's.
-    pub control: Arc<Control>,
-    /// The performer's clock's zero (the conductor's cues are timed on it).
-    pub origin: std::time::Instant,
-    /// The line the view shows under its head: the conductor's beats and tempo.
-    pub status: &'a dyn Fn() -> String,
-    /// A key pressed in the view (other than q and Esc).
-    pub on_key: &'a mut dyn FnMut(char),
+    /// A conductor (`orch conduct`), steering the performance through its own control; the
+    /// view shows its line under its head, and gives it the keys pressed (other than the jump
+    /// keys, q and Esc: taps, for a tap source).
+    pub conductor: Option<&'a Conducting>,
 }
 
 /// Logging through `tracing` on standard error: warnings (a device or a board lost, and back),
@@ -58,19 +49,6 @@ pub(crate) fn init_logging(verbose: bool) {
         .try_init();
 }
 
-/// Set by SIGINT, SIGTERM and SIGHUP: stop the way `q` does.
-fn stop_on_signals() -> anyhow::Result<Arc<AtomicBool>> {
-    let flag = Arc::new(AtomicBool::new(false));
-    for sig in [
-        signal_hook::consts::SIGINT,
-        signal_hook::consts::SIGTERM,
-        signal_hook::consts::SIGHUP,
-    ] {
-        signal_hook::flag::register(sig, Arc::clone(&flag))?;
-    }
-    Ok(flag)
-}
-
 /// Plays in real time: one sender thread per robot (real-time priority where allowed), all on
 /// one clock, the view on this thread. `q`, SIGINT, SIGTERM and SIGHUP stop every robot with
 /// every key released, and the reports still come; so does a panic, on any thread.
@@ -84,9 +62,10 @@ pub(crate) fn play_live(
         from_us,
         view: show,
         file,
-        mut conductor,
+        conductor,
     } = options;
-    let signalled = stop_on_signals()?;
+    // SIGINT, SIGTERM and SIGHUP stop the way `q` does.
+    let signalled = orch_stage::signals::stop_flag()?;
     let show = show && std::io::stdout().is_terminal();
     let title = file
         .file_name()
@@ -128,8 +107,8 @@ pub(crate) fn play_live(
                 Key::Char('[') => bars::before(song, bar_now),
                 Key::Char(']') => bars::after(song, bar_now),
                 Key::Char(c) => {
-                    if let Some(k) = conductor.as_mut() {
-                        (k.on_key)(c);
+                    if let Some(k) = conductor.filter(|_| c != 'q') {
+                        k.tap();
                     }
                     None
                 }
@@ -145,11 +124,14 @@ pub(crate) fn play_live(
         let Some(snapshot) = session.snapshot() else {
             return Ok(());
         };
-        let mut scene = scene(snapshot, &title);
-        bar_now = scene.bar;
-        scene.command = command;
-        scene.prompt = typed.shown().map(str::to_string);
-        scene.conductor = conductor.as_ref().map(|c| (c.status)());
+        bar_now = snapshot.bar;
+        let scene = Scene {
+            command,
+            title: title.clone(),
+            now: snapshot,
+            conductor: conductor.map(Conducting::line),
+            prompt: typed.shown().map(str::to_string),
+        };
         Ok(view.as_mut().expect("started").draw(&scene)?)
     };
     let watched = watch::play(song, lanes, control, origin, from_us, watch);
@@ -172,21 +154,4 @@ pub(crate) fn play_live(
             spec.text
         ),
     })
-}
-
-/// What the view shows of a session's snapshot.
-fn scene(s: Snapshot, title: &str) -> Scene {
-    Scene {
-        title: title.to_string(),
-        low_note: s.low_note,
-        down: s.keys_down,
-        bar: s.bar,
-        beat: s.beat,
-        bpm: s.bpm,
-        elapsed_s: s.elapsed_s,
-        total_s: s.total_s,
-        notes_sent: s.notes_sent,
-        notes: s.notes,
-        ..Scene::default()
-    }
 }

@@ -89,10 +89,7 @@ pub(crate) fn create(
 
 /// Opens every output: one robot (a lane) each; a bad output is bad input (exit 2).
 pub(crate) fn open_lanes(specs: Vec<OutSpec>, setup: &Setup) -> anyhow::Result<Vec<Lane>> {
-    orch_stage::session::open_lanes(specs, setup).map_err(|e| match e {
-        orch_stage::LiveError::BadInput(m) => bad_input(m),
-        e => anyhow::Error::new(e),
-    })
+    orch_stage::session::open_lanes(specs, setup).map_err(crate::error::live)
 }
 
 /// `--from BAR`: where bar `bar` begins, µs of score time; bad input (exit 2) for a bar the
@@ -107,12 +104,7 @@ pub(crate) fn from_bar(song: &Song, bar: Option<u32>) -> anyhow::Result<Option<u
 
 /// The `--out` options; the virtual robot alone when there is none.
 pub(crate) fn out_specs(outs: &[String]) -> anyhow::Result<Vec<OutSpec>> {
-    if outs.is_empty() {
-        return Ok(vec![OutSpec::parse("sim").expect("sim is an output")]);
-    }
-    outs.iter()
-        .map(|o| OutSpec::parse(o).map_err(|e| bad_input(e.to_string())))
-        .collect()
+    orch_stage::session::out_specs(outs).map_err(crate::error::live)
 }
 
 /// Prints every robot's report (JSON or text); says on standard error when an output's

@@ -16,11 +16,7 @@ use orch_stage::{load_robot, load_song};
 
 /// The user's input at fault (a soundfont, a rate) exits 2, anything else 1.
 fn lift(e: RenderError) -> anyhow::Error {
-    if e.is_bad_input() {
-        bad_input(e.to_string())
-    } else {
-        anyhow::Error::new(e)
-    }
+    crate::error::lift(e, RenderError::is_bad_input)
 }
 
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {

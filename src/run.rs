@@ -6,58 +6,22 @@
 //! The live robot and its loop are `orch-stage`'s ([`LiveRobot`], [`orch_stage::run`]); here:
 //! the arguments, the signals, the messages, the JSON log and the live view.
 
-use std::io::{BufWriter, IsTerminal, Write};
+use std::io::{BufWriter, IsTerminal};
 use std::sync::atomic::{AtomicI32, Ordering};
-use std::sync::mpsc::{self, Sender};
-use std::sync::{Arc, Mutex};
+use std::sync::mpsc;
+use std::sync::Arc;
 use std::time::Duration;
 
-use orch_io::{InTarget, MidiIn, OutSpec, Target};
+use orch_io::{InTarget, MidiIn, OutSpec};
 use orch_stage::run::{counters, end_state, End, Event, Loop, Said};
+use orch_stage::session::Snapshot;
 use orch_stage::thru::Thru;
-use orch_stage::writes;
-use orch_stage::{BoardWrite, LiveBoards, LiveError, LiveRobot};
+use orch_stage::writes::JsonLog;
+use orch_stage::{LiveBoards, LiveRobot};
 
 use crate::cli::RunArgs;
-use crate::error::bad_input;
+use crate::error::{bad_input, live as live_err};
 use crate::view::{Scene, View};
-
-/// Forwards SIGINT, SIGTERM, SIGHUP and SIGUSR1 into the loop's channel; a signal that stops
-/// it is kept in `stopped_by`.
-fn forward_signals(
-    tx: Sender<Event>,
-    stopped_by: Arc<AtomicI32>,
-) -> anyhow::Result<signal_hook::iterator::Handle> {
-    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM, SIGUSR1};
-    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP, SIGUSR1])?;
-    let handle = signals.handle();
-    std::thread::Builder::new()
-        .name("orch-signals".into())
-        .spawn(move || {
-            for s in signals.forever() {
-                let event = match s {
-                    SIGHUP => Event::Reload,
-                    SIGUSR1 => Event::Counters,
-                    _ => {
-                        stopped_by.store(s, Ordering::SeqCst);
-                        Event::Stop
-                    }
-                };
-                if tx.send(event).is_err() {
-                    return;
-                }
-            }
-        })?;
-    Ok(handle)
-}
-
-/// A live robot's error as the binary says it: bad input exits 2.
-fn live_err(e: LiveError) -> anyhow::Error {
-    match e {
-        LiveError::BadInput(m) => bad_input(m),
-        e => anyhow::Error::new(e),
-    }
-}
 
 /// What the loop says, on standard error, headed by what it is about.
 fn say(said: Said, input: &str) {
@@ -74,24 +38,14 @@ fn scene(live: &LiveRobot, title: &str) -> Scene {
     Scene {
         command: "orch run",
         title: title.to_string(),
-        low_note: live.interpreter().config().range.low().get(),
-        down: live.keys_down(),
-        elapsed_s: live.elapsed_s(),
-        notes_sent: live.totals().note_ons,
+        now: Snapshot {
+            low_note: live.interpreter().config().range.low().get(),
+            keys_down: live.keys_down(),
+            elapsed_s: live.elapsed_s(),
+            notes_sent: live.totals().note_ons,
+            ..Snapshot::default()
+        },
         ..Scene::default()
-    }
-}
-
-/// The JSON log on standard output, shared with the live robot's write log.
-type Log = Arc<Mutex<BufWriter<std::io::Stdout>>>;
-
-/// Flushes the log; a log whose standard output has gone (a closed pipe) is dropped: the
-/// robot plays on without it.
-fn flush_log(json: &mut Option<Log>) {
-    if let Some(w) = json {
-        if w.lock().unwrap_or_else(|e| e.into_inner()).flush().is_err() {
-            *json = None;
-        }
     }
 }
 
@@ -100,21 +54,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     crate::live::init_logging(args.verbose);
     let input = InTarget::parse(&args.input).map_err(|e| bad_input(e.to_string()))?;
     let out_spec = OutSpec::parse(&args.out).map_err(|e| bad_input(e.to_string()))?;
-    let thru_specs: Vec<OutSpec> = args
-        .thru
-        .iter()
-        .map(|t| {
-            OutSpec::parse(t).map_err(|e| bad_input(e.to_string().replacen("--out", "--thru", 1)))
-        })
-        .collect::<anyhow::Result<_>>()?;
-    for t in &thru_specs {
-        if matches!(t.target, Target::Sim | Target::I2c(_)) {
-            return Err(bad_input(format!(
-                "--thru {}: --thru takes MIDI outputs (serial:, rawmidi:, udp:); the robot is --out",
-                t.text
-            )));
-        }
-    }
+    let thru_specs = orch_stage::thru::specs(&args.thru).map_err(live_err)?;
     let robot = orch_stage::load_robot(args.robot.as_deref())?;
     robot.interpreter()?;
     let out = LiveBoards::open(&out_spec, &robot).map_err(live_err)?;
@@ -127,21 +67,14 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
 
     let (tx, rx) = mpsc::channel::<Event>();
     let stopped_by = Arc::new(AtomicI32::new(0));
-    let signals = forward_signals(tx.clone(), Arc::clone(&stopped_by))?;
+    let signals = orch_stage::signals::forward(tx.clone(), Arc::clone(&stopped_by))?;
     let midi_in =
         MidiIn::open(&input, tx).map_err(|e| bad_input(format!("--in {}: {e}", args.input)))?;
     tracing::debug!(input = midi_in.name(), "reading");
 
-    let mut json: Option<Log> = args
-        .json
-        .then(|| Arc::new(Mutex::new(BufWriter::new(std::io::stdout()))));
-    let log = json.clone().map(|w| {
-        Box::new(move |write: &BoardWrite| {
-            let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
-            // Standard output gone (a closed pipe): the robot plays on without the log.
-            let _ = writeln!(w, "{}", writes::json(write));
-        }) as Box<dyn FnMut(&BoardWrite) + Send>
-    });
+    // The JSON log on standard output, shared with the live robot's write log.
+    let mut json = JsonLog::to(args.json.then(|| BufWriter::new(std::io::stdout())));
+    let log = json.sink();
     let din = matches!(input, InTarget::Serial(_));
     let mut live = LiveRobot::new(robot, out, thru, din, log).map_err(live_err)?;
     let priority = orch_perform::realtime::raise_priority();
@@ -153,7 +86,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         // least (lost I2C boards are tried again).
         let every = Duration::from_millis(if view.is_some() { 33 } else { 200 });
         let mut after = |live: &LiveRobot| {
-            flush_log(&mut json);
+            json.flush();
             let v = view.as_mut()?;
             if crate::view::quit_requested() {
                 return Some(End::Quit);
@@ -174,11 +107,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     signals.close();
 
     let stopped = live.stop().map_err(live_err);
-    if let Some(w) = &json {
-        let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
-        let _ = writeln!(w, "{}", writes::final_json(&end_state(&live)));
-    }
-    flush_log(&mut json);
+    json.finish(&end_state(&live));
     if args.verbose {
         eprintln!("orch run: {}", counters(&live));
     }

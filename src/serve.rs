@@ -3,16 +3,12 @@
 //! stop any performance, every key released, and end the server.
 
 use std::io::Write;
-use std::net::{IpAddr, SocketAddr};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
-use std::time::Duration;
 
 use orch_perform::Tempo;
-use orch_serve::{Access, Config};
+use orch_serve::{Access, Config, ServeError};
 
 use crate::cli::ServeArgs;
-use crate::error::bad_input;
+use crate::error::{bad_input, lift};
 use crate::live::init_logging;
 use crate::play::out_specs;
 
@@ -21,24 +17,9 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let robot = orch_stage::load_robot(args.robot.as_deref())?;
     let setup = orch_stage::setup::setup(&robot, !args.no_compensation, Tempo::NORMAL);
     let outs = out_specs(&args.outs)?;
-    // Every output opened once at start: one that cannot be is said now, not at the first play.
-    drop(crate::play::open_lanes(outs.clone(), &setup)?);
-    if let Some(dir) = &args.library {
-        if !dir.is_dir() {
-            return Err(bad_input(format!(
-                "--library {}: not a folder",
-                dir.display()
-            )));
-        }
-    }
-    let signalled = Arc::new(AtomicBool::new(false));
-    for sig in [
-        signal_hook::consts::SIGINT,
-        signal_hook::consts::SIGTERM,
-        signal_hook::consts::SIGHUP,
-    ] {
-        signal_hook::flag::register(sig, Arc::clone(&signalled))?;
-    }
+    orch_serve::check(&setup, &outs, args.library.as_deref())
+        .map_err(|e| lift(e, ServeError::is_bad_input))?;
+    let signalled = orch_stage::signals::stop_flag()?;
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -47,8 +28,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         let listener = tokio::net::TcpListener::bind(args.listen)
             .await
             .map_err(|e| bad_input(format!("--listen {}: {e}", args.listen)))?;
-        let addr = listener.local_addr()?;
-        let access = Access::new(addr)?;
+        let access = Access::new(listener.local_addr()?)?;
         print_urls(&access)?;
         let config = Config {
             robot,
@@ -58,33 +38,17 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
             library: args.library.clone(),
             access,
         };
-        let shutdown = async move {
-            while !signalled.load(Ordering::SeqCst) {
-                tokio::time::sleep(Duration::from_millis(50)).await;
-            }
-        };
-        orch_serve::serve(listener, config, shutdown).await?;
-        anyhow::Ok(())
+        orch_serve::serve(listener, config, orch_serve::until_set(signalled))
+            .await
+            .map_err(|e| lift(e, ServeError::is_bad_input))
     })
 }
 
 /// The page's URLs, one a line on standard output (off loopback, each carrying the token).
 fn print_urls(access: &Access) -> anyhow::Result<()> {
-    let addr = access.addr();
-    let hosts: Vec<IpAddr> = if addr.ip().is_unspecified() {
-        let mut hosts = vec![if addr.is_ipv4() {
-            IpAddr::from([127, 0, 0, 1])
-        } else {
-            IpAddr::from(std::net::Ipv6Addr::LOCALHOST)
-        }];
-        hosts.extend(machine_addresses(addr));
-        hosts
-    } else {
-        vec![addr.ip()]
-    };
     let mut out = std::io::stdout().lock();
-    for host in hosts {
-        writeln!(out, "orch serve: the page is at {}", access.url(host))?;
+    for url in access.urls() {
+        writeln!(out, "orch serve: the page is at {url}")?;
     }
     if access.token().is_some() {
         writeln!(
@@ -94,30 +58,4 @@ fn print_urls(access: &Access) -> anyhow::Result<()> {
     }
     out.flush()?;
     Ok(())
-}
-
-/// This machine's addresses other than loopback, of `addr`'s family.
-fn machine_addresses(addr: SocketAddr) -> Vec<IpAddr> {
-    let Ok(ifaces) = nix::ifaddrs::getifaddrs() else {
-        return Vec::new();
-    };
-    let mut found: Vec<IpAddr> = ifaces
-        .filter_map(|i| i.address)
-        .filter_map(|a| {
-            if let Some(v4) = a.as_sockaddr_in() {
-                Some(IpAddr::V4(v4.ip()))
-            } else {
-                a.as_sockaddr_in6().map(|v6| IpAddr::V6(v6.ip()))
-            }
-        })
-        .filter(|ip| !ip.is_loopback() && ip.is_ipv4() == addr.is_ipv4())
-        .filter(|ip| match ip {
-            // Link-local IPv6 needs a zone in a URL: left out.
-            IpAddr::V6(v6) => (v6.segments()[0] & 0xffc0) != 0xfe80,
-            IpAddr::V4(_) => true,
-        })
-        .collect();
-    found.sort();
-    found.dedup();
-    found
 }

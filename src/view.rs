@@ -4,6 +4,7 @@
 use std::io;
 
 use orch_roll::note_name;
+use orch_stage::session::Snapshot;
 use ratatui::layout::{Constraint, Layout};
 use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
@@ -16,17 +17,9 @@ pub struct Scene {
     /// The command that runs, as its head says: `orch play`, `orch conduct`, `orch run`.
     pub command: &'static str,
     pub title: String,
-    /// The note of the lowest key.
-    pub low_note: u8,
-    /// Whether each key is down (its solenoid powered).
-    pub down: Vec<bool>,
-    pub bar: u32,
-    pub beat: u32,
-    pub bpm: f64,
-    pub elapsed_s: f64,
-    pub total_s: f64,
-    pub notes_sent: u64,
-    pub notes: u64,
+    /// Where the performance stands: the keys down (from the lowest key's note), bar, beat,
+    /// tempo, time and notes (`orch run`: the keys, the time and the notes sent).
+    pub now: Snapshot,
     /// `orch conduct`: the conductor's beats and tempo, a line under the head.
     pub conductor: Option<String>,
     /// A bar being typed to jump to (digits, then Enter), shown at the end of the head.
@@ -156,6 +149,7 @@ impl Drop for View {
 }
 
 fn render(f: &mut Frame, s: &Scene) {
+    let n = &s.now;
     let [head, conductor, keys, down, gauge] = Layout::vertical([
         Constraint::Length(1),
         Constraint::Length(u16::from(s.conductor.is_some())),
@@ -171,7 +165,7 @@ fn render(f: &mut Frame, s: &Scene) {
         ),
         Span::raw(format!(
             "{}   bar {} beat {}   {:.1} bpm   notes {}/{}",
-            s.title, s.bar, s.beat, s.bpm, s.notes_sent, s.notes
+            s.title, n.bar, n.beat, n.bpm, n.notes_sent, n.notes
         )),
     ];
     if let Some(p) = &s.prompt {
@@ -189,8 +183,8 @@ fn render(f: &mut Frame, s: &Scene) {
     // One cell a key; pressed keys lit. Octave labels above.
     let mut labels = String::new();
     let mut cells = Vec::new();
-    for (i, &is_down) in s.down.iter().enumerate() {
-        let note = s.low_note.saturating_add(i as u8);
+    for (i, &is_down) in n.keys_down.iter().enumerate() {
+        let note = n.low_note.saturating_add(i as u8);
         if note % 12 == 0 {
             let name = note_name(note);
             while labels.chars().count() < i {
@@ -215,28 +209,28 @@ fn render(f: &mut Frame, s: &Scene) {
     let board = Paragraph::new(vec![Line::raw(labels), Line::from(cells)]).block(
         Block::default()
             .borders(Borders::ALL)
-            .title(format!(" {} keys ", s.down.len())),
+            .title(format!(" {} keys ", n.keys_down.len())),
     );
     f.render_widget(board, keys);
 
-    let names: Vec<String> = s
-        .down
+    let names: Vec<String> = n
+        .keys_down
         .iter()
         .enumerate()
         .filter(|(_, d)| **d)
-        .map(|(i, _)| note_name(s.low_note.saturating_add(i as u8)))
+        .map(|(i, _)| note_name(n.low_note.saturating_add(i as u8)))
         .collect();
     f.render_widget(Paragraph::new(format!("down: {}", names.join(" "))), down);
 
-    let ratio = if s.total_s > 0.0 {
-        (s.elapsed_s / s.total_s).clamp(0.0, 1.0)
+    let ratio = if n.total_s > 0.0 {
+        (n.elapsed_s / n.total_s).clamp(0.0, 1.0)
     } else {
         1.0
     };
     let gauge_widget = Gauge::default()
         .gauge_style(Style::default().fg(Color::Cyan))
         .ratio(ratio)
-        .label(format!("{} / {}", clock(s.elapsed_s), clock(s.total_s)));
+        .label(format!("{} / {}", clock(n.elapsed_s), clock(n.total_s)));
     f.render_widget(gauge_widget, gauge);
 }
 
@@ -255,15 +249,18 @@ mod tests {
         let scene = Scene {
             command: "orch conduct",
             title: "t.mid".into(),
-            low_note: 36,
-            down,
-            bar: 3,
-            beat: 2,
-            bpm: 120.0,
-            elapsed_s: 61.0,
-            total_s: 122.0,
-            notes_sent: 5,
-            notes: 10,
+            now: Snapshot {
+                low_note: 36,
+                keys_down: down,
+                bar: 3,
+                beat: 2,
+                bpm: 120.0,
+                elapsed_s: 61.0,
+                total_s: 122.0,
+                notes_sent: 5,
+                notes: 10,
+                ..Snapshot::default()
+            },
             conductor: Some("conductor: beat 7, 96.0 BPM".into()),
             prompt: Some("12".into()),
         };

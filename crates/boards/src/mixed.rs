@@ -158,6 +158,20 @@ impl<I2C: I2c, const N: usize> MixedBoardSet<I2C, N> {
         self.i2c
     }
 
+    /// PWM board `index`'s bus, address and cache, for a write of the single-board driver's
+    /// ([`Pca9685Set`](crate::Pca9685Set)'s channel writes); [`Error::UnknownBoard`] if the
+    /// set has no such PWM board.
+    pub(crate) fn pwm_board(
+        &mut self,
+        index: u8,
+    ) -> Result<(&mut I2C, u8, &mut State), Error<I2C::Error>> {
+        let i = usize::from(index);
+        if i >= self.len || self.kinds[i] != BoardKind::Pwm {
+            return Err(Error::UnknownBoard(index));
+        }
+        Ok((&mut self.i2c, self.addresses[i], &mut self.pwm[i]))
+    }
+
     /// The board `board` names, checked.
     fn slot(&self, board: BoardId) -> Result<usize, Error<I2C::Error>> {
         let i = usize::from(board.index);

@@ -2,8 +2,9 @@
 //! --out OUT --mic DEVICE`.
 //!
 //! [`take`] opens nothing itself but the robot's output: the microphone comes opened (so a
-//! wrong device is refused before the robot moves), the robot's output is opened through
-//! orch-stage as `orch play --out` opens it, then
+//! wrong device is refused before the robot moves), and so does the [`Keep`] file the
+//! recording is also written to, if any; the robot's output is opened through orch-stage as
+//! `orch play --out` opens it, then
 //!
 //! 1. the recording starts ([`Mic::start`]) for the score's length, [`TAIL`] and
 //!    [`START_MARGIN`];
@@ -21,6 +22,9 @@
 //!    the chain (output, robot, air, microphone, capture).
 
 use std::fmt;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -120,6 +124,10 @@ pub enum TakeError {
     },
     /// Stopped by the `stop` flag (a signal) before the end.
     Stopped,
+    /// The `--keep` file cannot be created (bad input).
+    KeepCreate(PathBuf, std::io::Error),
+    /// The recording could not be written to the `--keep` file.
+    KeepWrite(PathBuf, hound::Error),
     /// A bug: the score's own SMF did not parse.
     Internal(String),
 }
@@ -136,6 +144,8 @@ impl fmt::Display for TakeError {
             Self::Stopped => {
                 f.write_str("stopped before the end of the score (every key released)")
             }
+            Self::KeepCreate(path, e) => write!(f, "--keep {}: {e}", path.display()),
+            Self::KeepWrite(path, _) => write!(f, "--keep {}", path.display()),
             Self::Internal(m) => write!(f, "internal error: {m}"),
         }
     }
@@ -145,15 +155,49 @@ impl std::error::Error for TakeError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             Self::Mic(e) => Some(e),
+            Self::KeepWrite(_, e) => Some(e),
             _ => None,
         }
     }
 }
 
 impl TakeError {
-    /// Whether the error is the user's input (an output that cannot be used as given).
+    /// Whether the error is the user's input (an output that cannot be used as given, a
+    /// `--keep` file that cannot be created).
     pub fn is_bad_input(&self) -> bool {
-        matches!(self, Self::Output(_))
+        matches!(self, Self::Output(_) | Self::KeepCreate(..))
+    }
+}
+
+/// The robot's output for a take, parsed from `text` as `orch play --out` takes it (bad
+/// input, [`TakeError::Output`], if it is not one).
+pub fn output(text: &str) -> Result<OutSpec, TakeError> {
+    OutSpec::parse(text).map_err(|e| TakeError::Output(e.to_string()))
+}
+
+/// A file the recording is also written to (`--keep`): created before the take, so that a
+/// path that cannot be written does not lose it.
+#[derive(Debug)]
+pub struct Keep {
+    path: PathBuf,
+    file: File,
+}
+
+impl Keep {
+    /// Creates the file at `path` ([`TakeError::KeepCreate`] if it cannot be).
+    pub fn create(path: &Path) -> Result<Keep, TakeError> {
+        let file = File::create(path).map_err(|e| TakeError::KeepCreate(path.to_path_buf(), e))?;
+        Ok(Keep {
+            path: path.to_path_buf(),
+            file,
+        })
+    }
+
+    /// Writes `recording` to the file (WAV, 32-bit float).
+    pub fn write(self, recording: &Recording) -> Result<(), TakeError> {
+        recording
+            .write(BufWriter::new(self.file))
+            .map_err(|e| TakeError::KeepWrite(self.path, e))
     }
 }
 

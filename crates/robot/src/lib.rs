@@ -73,14 +73,21 @@ impl Robot {
 
     /// Reads a configuration file. Errors in it are [`RobotError::InFile`], naming the file.
     pub fn load(path: &Path) -> Result<Self, RobotError> {
+        Self::load_with_text(path).map(|(robot, _)| robot)
+    }
+
+    /// Reads a configuration file as [`load`](Self::load) does, and gives its text back too
+    /// (to write a changed copy of it, keeping its comments: a calibrated robot.toml).
+    pub fn load_with_text(path: &Path) -> Result<(Self, String), RobotError> {
         let text = std::fs::read_to_string(path).map_err(|source| RobotError::Read {
             path: path.to_path_buf(),
             source,
         })?;
-        Self::from_toml(&text).map_err(|error| RobotError::InFile {
+        let robot = Self::from_toml(&text).map_err(|error| RobotError::InFile {
             path: path.to_path_buf(),
             error: Box::new(error),
-        })
+        })?;
+        Ok((robot, text))
     }
 
     /// Parses and checks a configuration.

@@ -65,6 +65,25 @@ impl Access {
         }
     }
 
+    /// The page's URLs, each as [`url`](Self::url) gives it: at the address listened on, or,
+    /// listening on all addresses, at loopback first and then at each of the machine's other
+    /// addresses of that family (link-local IPv6 left out: it needs a zone in a URL).
+    pub fn urls(&self) -> Vec<String> {
+        let addr = self.addr;
+        let hosts: Vec<IpAddr> = if addr.ip().is_unspecified() {
+            let mut hosts = vec![if addr.is_ipv4() {
+                IpAddr::from([127, 0, 0, 1])
+            } else {
+                IpAddr::from(std::net::Ipv6Addr::LOCALHOST)
+            }];
+            hosts.extend(machine_addresses(addr));
+            hosts
+        } else {
+            vec![addr.ip()]
+        };
+        hosts.into_iter().map(|h| self.url(h)).collect()
+    }
+
     /// Whether a request's `Host` names this server (see the [module notes](self)).
     pub fn host_ok(&self, host: &str) -> bool {
         let Some((name, port)) = split_host(host) else {
@@ -196,12 +215,55 @@ pub async fn check(State(access): State<Access>, request: Request, next: Next) -
     response
 }
 
+/// This machine's addresses other than loopback, of `addr`'s family, sorted.
+fn machine_addresses(addr: SocketAddr) -> Vec<IpAddr> {
+    let Ok(ifaces) = nix::ifaddrs::getifaddrs() else {
+        return Vec::new();
+    };
+    let mut found: Vec<IpAddr> = ifaces
+        .filter_map(|i| i.address)
+        .filter_map(|a| {
+            if let Some(v4) = a.as_sockaddr_in() {
+                Some(IpAddr::V4(v4.ip()))
+            } else {
+                a.as_sockaddr_in6().map(|v6| IpAddr::V6(v6.ip()))
+            }
+        })
+        .filter(|ip| !ip.is_loopback() && ip.is_ipv4() == addr.is_ipv4())
+        .filter(|ip| match ip {
+            // Link-local IPv6 needs a zone in a URL: left out.
+            IpAddr::V6(v6) => (v6.segments()[0] & 0xffc0) != 0xfe80,
+            IpAddr::V4(_) => true,
+        })
+        .collect();
+    found.sort();
+    found.dedup();
+    found
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn at(addr: &str) -> Access {
         Access::new(addr.parse().unwrap()).unwrap()
+    }
+
+    #[test]
+    fn the_urls_are_the_address_listened_on_or_loopback_first_then_the_machines() {
+        assert_eq!(at("127.0.0.1:8000").urls(), ["http://127.0.0.1:8000/"]);
+        assert_eq!(at("[::1]:8000").urls(), ["http://[::1]:8000/"]);
+        let all = at("0.0.0.0:8000");
+        let token = all.token().unwrap();
+        let urls = all.urls();
+        assert_eq!(urls[0], format!("http://127.0.0.1:8000/?token={token}"));
+        for url in &urls[1..] {
+            assert!(!url.contains("127.0.0.1") && !url.contains('['), "{url}");
+            assert!(url.ends_with(&format!(":8000/?token={token}")), "{url}");
+        }
+        let v6 = at("[::]:8000");
+        assert!(v6.urls()[0].starts_with("http://[::1]:8000/?token="));
+        assert!(v6.urls().iter().all(|u| !u.contains("[fe80")));
     }
 
     #[test]

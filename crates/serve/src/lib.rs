@@ -21,7 +21,10 @@
 //! - [`player`]: the songs loaded, the queue, the performance playing (an
 //!   [`orch_stage::session::Session`]) and the state every viewer is sent.
 //!
-//! Errors are [`ServeError`] (the server could not run). What a request gets wrong is
+//! - [`check`]: what can be checked before serving (the outputs, the library), and
+//!   [`until_set`]: a shutdown when a flag is set (a signal).
+//!
+//! Errors are [`ServeError`] (the server could not start or run). What a request gets wrong is
 //! answered to it (`{"error": "..."}` with a 4xx status) and changes nothing.
 
 pub mod api;
@@ -29,8 +32,10 @@ pub mod guard;
 pub mod player;
 
 use std::net::SocketAddr;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
+use std::time::Duration;
 
 use orch_io::OutSpec;
 use orch_perform::Setup;
@@ -75,12 +80,7 @@ pub fn analyze(robot: &Robot, setup: &Setup, name: &str, bytes: &[u8]) -> Result
     let svg = orch_stage::analysis::roll_svg(&song, robot, &played, setup.tempo, name)
         .map_err(|e| words(&e))?;
     let text = orch_stage::text::analysis(&analysis, std::path::Path::new(name));
-    // `orch analyze --json`: the report's fields and the notes that went wrong (the findings
-    // are its text's).
-    let mut json = serde_json::to_value(&analysis).map_err(|e| e.to_string())?;
-    if let Some(map) = json.as_object_mut() {
-        map.remove("findings");
-    }
+    let json = analysis.json().map_err(|e| e.to_string())?;
     Ok(Analysis {
         song,
         json,
@@ -118,16 +118,32 @@ pub struct Config {
     pub access: Access,
 }
 
-/// Why the server could not run.
+/// Why the server could not run, or start.
 #[derive(Debug)]
 pub enum ServeError {
+    /// Bad input from the user, said in words: a library that is not a folder.
+    BadInput(String),
+    /// An output that cannot be opened (checked at start, see [`check`]).
+    Output(orch_stage::LiveError),
     /// Serving failed (the listener).
     Io(std::io::Error),
+}
+
+impl ServeError {
+    /// Whether the user's input is at fault (a library, an output as given).
+    pub fn is_bad_input(&self) -> bool {
+        matches!(
+            self,
+            ServeError::BadInput(_) | ServeError::Output(orch_stage::LiveError::BadInput(_))
+        )
+    }
 }
 
 impl std::fmt::Display for ServeError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
+            ServeError::BadInput(m) => f.write_str(m),
+            ServeError::Output(e) => write!(f, "{e}"),
             ServeError::Io(e) => write!(f, "serving the page: {e}"),
         }
     }
@@ -136,8 +152,35 @@ impl std::fmt::Display for ServeError {
 impl std::error::Error for ServeError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
+            ServeError::BadInput(_) => None,
+            // The output's error says itself: what is behind it, as it says it.
+            ServeError::Output(e) => e.source(),
             ServeError::Io(e) => Some(e),
         }
+    }
+}
+
+/// What can be checked before serving, so that it is said at start and not at the first
+/// play: every output opened once (for `setup`) and let go, and the library (if any) a
+/// folder.
+pub fn check(setup: &Setup, outs: &[OutSpec], library: Option<&Path>) -> Result<(), ServeError> {
+    drop(orch_stage::session::open_lanes(outs.to_vec(), setup).map_err(ServeError::Output)?);
+    if let Some(dir) = library {
+        if !dir.is_dir() {
+            return Err(ServeError::BadInput(format!(
+                "--library {}: not a folder",
+                dir.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Resolves once `flag` is set (by a signal: [`orch_stage::signals::stop_flag`]): a
+/// shutdown for [`serve`], looked at every 50 ms.
+pub async fn until_set(flag: Arc<AtomicBool>) {
+    while !flag.load(Ordering::SeqCst) {
+        tokio::time::sleep(Duration::from_millis(50)).await;
     }
 }
 

@@ -49,6 +49,18 @@ pub struct Analysis {
     pub findings: Vec<String>,
 }
 
+impl Analysis {
+    /// As `orch analyze --json` prints it: the report's fields and the notes that went wrong
+    /// (the findings are its text's, [`crate::text::analysis`]).
+    pub fn json(&self) -> Result<serde_json::Value, serde_json::Error> {
+        let mut value = serde_json::to_value(self)?;
+        if let Some(map) = value.as_object_mut() {
+            map.remove("findings");
+        }
+        Ok(value)
+    }
+}
+
 /// Analyses `song` on `robot` as `setup` plays it: the analysis, and the performance it was
 /// drawn from (for its account or its roll).
 pub fn analyze(

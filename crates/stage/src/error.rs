@@ -131,6 +131,13 @@ pub enum LiveError {
     Failed(String),
 }
 
+impl LiveError {
+    /// Whether the user's input is at fault ([`LiveError::BadInput`]).
+    pub fn is_bad_input(&self) -> bool {
+        matches!(self, LiveError::BadInput(_))
+    }
+}
+
 impl fmt::Display for LiveError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

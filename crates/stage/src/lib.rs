@@ -9,11 +9,15 @@
 //! A song and a robot:
 //!
 //! - [`load`]: a Standard MIDI File read and checked ([`load_song`]: its first bytes before
-//!   the rest, its size capped) and the robot ([`load_robot`]: robot.toml, or the thesis's).
+//!   the rest, its size capped) and the robot ([`load_robot`]: robot.toml, or the thesis's;
+//!   [`load::load_robot_text`] with its text, for a calibrated copy).
 //! - [`setup`]: how a robot plays (the performance's `Setup`), the tempo factors allowed,
 //!   and a performance on the virtual clock, as fast as the machine goes.
 //! - [`bars`]: bars as people count them, where each begins (for a jump there), and a bar
 //!   typed a digit at a time.
+//! - [`signals`]: SIGINT, SIGTERM and SIGHUP as a flag that stops a live front end, and the
+//!   signals as the live robot's loop events (SIGHUP reads the robot again, SIGUSR1 asks for
+//!   the counters).
 //!
 //! Playing it, live or on the virtual clock:
 //!
@@ -29,7 +33,7 @@
 //!   ([`sources::follow`]: each cue to the follower, its answer to the performance's
 //!   `Control`, and the follower woken between cues when it asks), with what the conductor
 //!   did ([`sources::Status`]); [`conductor`]: a source opened and followed on a thread of
-//!   its own.
+//!   its own ([`conductor::Conducting`]: for a song, with its taps and its status line).
 //! - [`live`]: the live interpreter ([`LiveRobot`]): live MIDI bytes in, orch-core's
 //!   interpreter and guard, finger boards out (the virtual robot, or boards on a Linux I2C
 //!   bus), the stream passed on ([`thru`], re-framed by [`framer`]), a robot read again
@@ -83,6 +87,7 @@ pub mod report;
 pub mod run;
 pub mod session;
 pub mod setup;
+pub mod signals;
 pub mod sources;
 pub mod text;
 pub mod thru;

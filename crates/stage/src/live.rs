@@ -96,8 +96,8 @@ pub struct BoardWrite {
     pub duty: Option<[u16; 16]>,
 }
 
-/// Who watches the writes.
-type WriteLog = Box<dyn FnMut(&BoardWrite) + Send>;
+/// Who watches the writes: called with each board write as it is made ([`LiveRobot::new`]).
+pub type WriteLog = Box<dyn FnMut(&BoardWrite) + Send>;
 
 /// The boards, with every write shown to the log.
 struct Tap {

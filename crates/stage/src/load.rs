@@ -1,5 +1,6 @@
 //! Loading what a session plays: a Standard MIDI File (checked from its first bytes, its size
-//! capped before it is read) and the robot (`robot.toml`, or the thesis's robot).
+//! capped before it is read) and the robot (`robot.toml`, or the thesis's robot; with its
+//! text, for a changed copy of it).
 
 use std::fs::File;
 use std::io::{self, Read};
@@ -39,6 +40,15 @@ pub fn load_robot(path: Option<&Path>) -> Result<Robot, RobotError> {
     match path {
         Some(p) => Robot::load(p),
         None => Ok(Robot::thesis()),
+    }
+}
+
+/// The robot in `path`'s robot.toml and the file's text, or the thesis's robot and its text
+/// ([`orch_robot::DEFAULT_TOML`]) when there is none: what a calibrated copy is written from.
+pub fn load_robot_text(path: Option<&Path>) -> Result<(Robot, String), RobotError> {
+    match path {
+        Some(p) => Robot::load_with_text(p),
+        None => Ok((Robot::thesis(), orch_robot::DEFAULT_TOML.to_string())),
     }
 }
 
@@ -113,6 +123,27 @@ fn too_large(name: &str, limit: u64) -> StageError {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_robot_comes_with_its_files_text_or_the_theses() {
+        let (robot, text) = load_robot_text(None).unwrap();
+        assert_eq!(text, orch_robot::DEFAULT_TOML);
+        assert_eq!(robot.config, Robot::thesis().config);
+        let dir = std::env::temp_dir().join(format!("orch-stage-load-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("robot.toml");
+        let written = format!("# mine\n{}", orch_robot::DEFAULT_TOML);
+        std::fs::write(&path, &written).unwrap();
+        let (robot, text) = load_robot_text(Some(&path)).unwrap();
+        assert_eq!(text, written);
+        assert_eq!(robot.config, Robot::thesis().config);
+        let missing = dir.join("none.toml");
+        assert!(matches!(
+            load_robot_text(Some(&missing)),
+            Err(RobotError::Read { .. })
+        ));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     /// A reader of endless bytes that counts what was read from it.
     struct Endless<'a> {

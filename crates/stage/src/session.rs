@@ -29,6 +29,19 @@ pub struct Lane {
     pub out: Option<Output>,
 }
 
+/// The outputs `texts` name (`--out`), each parsed as [`OutSpec::parse`] takes it; the
+/// virtual robot alone (`sim`) when there is none. Bad input ([`LiveError::BadInput`]) for
+/// one that is not an output.
+pub fn out_specs(texts: &[String]) -> Result<Vec<OutSpec>, LiveError> {
+    if texts.is_empty() {
+        return Ok(vec![OutSpec::parse("sim").expect("sim is an output")]);
+    }
+    texts
+        .iter()
+        .map(|o| OutSpec::parse(o).map_err(|e| LiveError::BadInput(e.to_string())))
+        .collect()
+}
+
 /// Opens every output in `specs`: one robot (a lane) each, set up as `setup` with its link.
 pub fn open_lanes(specs: Vec<OutSpec>, setup: &Setup) -> Result<Vec<Lane>, LiveError> {
     let mut lanes = Vec::new();
@@ -70,7 +83,7 @@ pub fn lane_events(song: &Song, channels: Channels) -> (Vec<ScoreEvent>, usize) 
 
 /// Where a live session stands: every robot's keys together, where the first robot is in the
 /// song.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Snapshot {
     /// The MIDI note of the lowest key.
     pub low_note: u8,

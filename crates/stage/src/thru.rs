@@ -6,12 +6,36 @@ use std::sync::mpsc::{self, Sender};
 use std::time::Instant as Wall;
 
 use orch_io::midi::all_notes_off;
-use orch_io::{OutSpec, Output};
+use orch_io::{OutSpec, Output, Target};
 use orch_perform::MidiOut as _;
 use orch_robot::Robot;
 
 use crate::framer::Framer;
 use crate::LiveError;
+
+/// The `--thru` outputs, parsed from `texts` as `--out` takes them (its errors said of
+/// `--thru`): MIDI outputs only (`serial:`, `rawmidi:`, `udp:`); the virtual robot and I2C
+/// boards are the robot itself (`--out`), refused. Every one is parsed before any is looked
+/// at. Bad input ([`LiveError::BadInput`]) otherwise.
+pub fn specs(texts: &[String]) -> Result<Vec<OutSpec>, LiveError> {
+    let specs: Vec<OutSpec> = texts
+        .iter()
+        .map(|t| {
+            OutSpec::parse(t)
+                .map_err(|e| LiveError::BadInput(e.to_string().replacen("--out", "--thru", 1)))
+        })
+        .collect::<Result<_, _>>()?;
+    if let Some(t) = specs
+        .iter()
+        .find(|t| matches!(t.target, Target::Sim | Target::I2c(_)))
+    {
+        return Err(LiveError::BadInput(format!(
+            "--thru {}: --thru takes MIDI outputs (serial:, rawmidi:, udp:); the robot is --out",
+            t.text
+        )));
+    }
+    Ok(specs)
+}
 
 /// A `--thru` output on a thread of its own (a DIN line is written at the wire's pace, which
 /// must not hold up the robot).
@@ -82,5 +106,38 @@ impl Thru {
                 self.spec.text
             ))),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn texts(t: &[&str]) -> Vec<String> {
+        t.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn thru_takes_midi_outputs_and_refuses_the_robot_after_parsing_all() {
+        let ok = specs(&texts(&["udp:127.0.0.1:5004", "rawmidi:/dev/snd/midiC1D0"])).unwrap();
+        assert_eq!(ok.len(), 2);
+        assert!(specs(&[]).unwrap().is_empty());
+        for robot in ["sim", "i2c:/dev/i2c-1"] {
+            let e = specs(&texts(&[robot])).unwrap_err();
+            assert!(matches!(e, LiveError::BadInput(_)), "{e}");
+            assert!(
+                e.to_string()
+                    .starts_with(&format!("--thru {robot}: --thru takes")),
+                "{e}"
+            );
+        }
+        let e = specs(&texts(&["sim", "nonsense:x"]))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("--thru") && !e.contains("--out nonsense"),
+            "parsed first: {e}"
+        );
+        assert!(!e.contains("the robot is --out"), "parsed first: {e}");
     }
 }
