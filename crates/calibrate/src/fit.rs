@@ -216,4 +216,24 @@ mod tests {
         assert_eq!(remarks.len(), 1);
         assert!(fit(&[level(0.5, 0.9, 1.0, 2.0, 0.0)], 1.0).is_none());
     }
+
+    #[test]
+    fn a_noisy_soft_level_counts_less() {
+        // The soft level 1 dB too loud: unweighted, the softest moves with it; said to be
+        // 2 dB noisy, the loud levels keep it near the truth.
+        let duties = [0.45, 0.633, 0.817, 1.0];
+        let mut m: Vec<_> = duties
+            .iter()
+            .map(|&d| level(d, 0.55, 12.0, 31.0, -20.0))
+            .collect();
+        m[1].sound = m[1].sound.map(|(d, l)| (d, l + 1.0));
+        let plain = fit(&m, 15.0).unwrap().0.softest;
+        m[1].level_sigma_db = 2.0;
+        let weighed = fit(&m, 15.0).unwrap().0.softest;
+        assert!((plain - 0.55).abs() > 0.004, "{plain}");
+        assert!(
+            (weighed - 0.55).abs() < 0.3 * (plain - 0.55).abs(),
+            "{weighed} {plain}"
+        );
+    }
 }

@@ -148,3 +148,16 @@ pub fn calibrated(input: &str, cal: &Calibration) -> Result<String, CalibrateErr
     })?;
     Ok(text)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_margin_is_in_the_keys_own_steps() {
+        // 1.5 steps of (100 − softest) / 126 each.
+        assert!((written_softest_percent(40.0) - (40.0 + 1.5 * 60.0 / 126.0)).abs() < 1e-9);
+        assert!((written_softest_percent(75.0) - (75.0 + 1.5 * 25.0 / 126.0)).abs() < 1e-9);
+        assert_eq!(written_softest_percent(100.0), 100.0);
+    }
+}
