@@ -32,7 +32,7 @@ fn main() {
     );
     println!(
         "font snr_db seed | press_delay max ms | each level's delay median / max ms | \
-         velocity steps median / max | softest wrong | missed | \
+         velocity steps median / max | keys over 3 steps (velocity 1 silent) | softest wrong | missed | \
          median onset error ms, bach-bwv846-prelude on the hidden robot with the written robot.toml | \
          render x real time | analysis s"
     );
@@ -77,12 +77,14 @@ fn main() {
                     ))
                 });
                 println!(
-                    "{name} {snr} {seed} | {:.2} | {:.2} / {:.2} | {:.1} / {:.1} | {:?} | {:?} | {onset:.2} | {speed:.0} | {secs:.1}",
+                    "{name} {snr} {seed} | {:.2} | {:.2} / {:.2} | {:.1} / {:.1} | {} ({}) | {:?} | {:?} | {onset:.2} | {speed:.0} | {secs:.1}",
                     e.press_delay_max_ms,
                     e.delay_median_ms,
                     e.delay_max_ms,
                     e.velocity_median_steps,
                     e.velocity_max_steps,
+                    e.velocity_over_3.len(),
+                    e.velocity_1_silent.len(),
                     e.softest_wrong,
                     e.missed
                 );

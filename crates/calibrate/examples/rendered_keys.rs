@@ -66,7 +66,7 @@ fn main() {
                 duty(&calibrated, k.note, 1)
             );
         }
-        let mut line = format!("{} s={:.3} |", k.note, h.softest);
+        let mut line = format!("{} s={:.4} |", k.note, h.softest);
         for l in &k.levels {
             let d = duty(&robot, k.note, l.velocity);
             let loud = h.loudness_at(d);
@@ -81,7 +81,7 @@ fn main() {
         }
         if let Some(f) = k.fit {
             line += &format!(
-                " fit s={:.3} pd {:+.2}",
+                " fit s={:.4} pd {:+.2}",
                 f.softest_percent / 100.0,
                 f.press_delay_ms - h.press_delay_ms
             );

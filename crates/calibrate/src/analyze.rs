@@ -269,6 +269,7 @@ pub fn analyze(
                 level_db: None,
             };
             let mut sound = None;
+            let mut level_sigma_db = 0.0;
             match h.onsets_ms.as_slice() {
                 [] => {}
                 [t] => {
@@ -276,6 +277,7 @@ pub fn analyze(
                     level.press_delay_ms = Some(d);
                     level.level_db = h.level_db;
                     sound = h.level_db.map(|l| (d, l));
+                    level_sigma_db = h.level_sigma_db.unwrap_or(0.0);
                 }
                 many => problems.push(format!(
                     "velocity {}: {} onsets for one strike (at {}): not fitted",
@@ -287,7 +289,11 @@ pub fn analyze(
                         .join(", ")
                 )),
             }
-            measured.push(Measured { duty, sound });
+            measured.push(Measured {
+                duty,
+                sound,
+                level_sigma_db,
+            });
             levels.push(level);
         }
         let softest_velocity = levels

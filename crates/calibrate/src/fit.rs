@@ -9,9 +9,12 @@
 //! SoundFont convention), a 36 dB range.
 //!
 //! - **softest**: between the loudest level that made no sound and the softest that did;
-//!   within that bracket, the duty whose loudness curve best fits the measured levels (least
-//!   squares in dB, the key's full-power level fitted with it). With one sounding level it
-//!   cannot be fitted: the middle of the bracket, said in the key's problems.
+//!   within that bracket, the duty whose loudness curve best fits every sounding level
+//!   (least squares in dB, the key's full-power level fitted with it), each level weighed by
+//!   `1 / (σ² + LEVEL_FLOOR_DB²)` ([`LEVEL_FLOOR_DB`]), σ its noise (from the key's own noise frames, see
+//!   [`Measured::level_sigma_db`]): a soft level a few dB over the noise in the key's bins
+//!   counts less than the loud ones. With one sounding level it cannot be fitted: the
+//!   middle of the bracket, said in the key's problems.
 //! - **press delays**: least squares of the delays against `(1 − d) / (1 − softest)`: the
 //!   intercept is `press_delay`, intercept plus slope `soft_press_delay`. With one level, the
 //!   robot file's slope is kept.
@@ -23,7 +26,14 @@ pub struct Measured {
     pub duty: f64,
     /// Its press delay (ms, on the analysis' clock) and level (dB), if it sounded once.
     pub sound: Option<(f64, f64)>,
+    /// How far the noise may move that level, dB (one standard deviation; 0 if not known).
+    pub level_sigma_db: f64,
 }
+
+/// The level's own uncertainty, dB, besides the noise: the virtual robot's loudness and the
+/// synthesizer's velocity are whole steps (0.3 dB a velocity step at a middle loudness), a
+/// uniform error of half a step either way.
+pub const LEVEL_FLOOR_DB: f64 = 0.1;
 
 /// A key's fitted figures (delays on the analysis' clock, before the anchor).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -66,6 +76,13 @@ pub fn fit(levels: &[Measured], file_slope_ms: f64) -> Option<(Fit, Vec<String>)
         .iter()
         .filter_map(|m| m.sound.map(|(d, l)| (m.duty, d, l)))
         .collect();
+    // Each level weighed by its uncertainty: a soft level near the noise counts less.
+    let weight: Vec<f64> = levels
+        .iter()
+        .filter(|m| m.sound.is_some())
+        .map(|m| 1.0 / (m.level_sigma_db.powi(2) + LEVEL_FLOOR_DB.powi(2)))
+        .collect();
+    let total_weight: f64 = weight.iter().sum();
     if sounding.is_empty() {
         return None;
     }
@@ -106,13 +123,15 @@ pub fn fit(levels: &[Measured], file_slope_ms: f64) -> Option<(Fit, Vec<String>)
             let full = sounding
                 .iter()
                 .zip(&model)
-                .map(|(x, m)| x.2 - m)
+                .zip(&weight)
+                .map(|((x, m), w)| w * (x.2 - m))
                 .sum::<f64>()
-                / sounding.len() as f64;
+                / total_weight;
             let err: f64 = sounding
                 .iter()
                 .zip(&model)
-                .map(|(x, m)| (x.2 - full - m).powi(2))
+                .zip(&weight)
+                .map(|((x, m), w)| w * (x.2 - full - m).powi(2))
                 .sum();
             if err < best.0 {
                 best = (err, s, full);
@@ -161,6 +180,7 @@ mod tests {
     fn level(duty: f64, s: f64, pd: f64, spd: f64, full: f64) -> Measured {
         Measured {
             duty,
+            level_sigma_db: 0.0,
             sound: (duty >= s).then(|| {
                 (
                     pd + (spd - pd) * (1.0 - duty) / (1.0 - s),
@@ -195,5 +215,25 @@ mod tests {
         assert!((f.softest - 0.9085).abs() < 0.001);
         assert_eq!(remarks.len(), 1);
         assert!(fit(&[level(0.5, 0.9, 1.0, 2.0, 0.0)], 1.0).is_none());
+    }
+
+    #[test]
+    fn a_noisy_soft_level_counts_less() {
+        // The soft level 1 dB too loud: unweighted, the softest moves with it; said to be
+        // 2 dB noisy, the loud levels keep it near the truth.
+        let duties = [0.45, 0.633, 0.817, 1.0];
+        let mut m: Vec<_> = duties
+            .iter()
+            .map(|&d| level(d, 0.55, 12.0, 31.0, -20.0))
+            .collect();
+        m[1].sound = m[1].sound.map(|(d, l)| (d, l + 1.0));
+        let plain = fit(&m, 15.0).unwrap().0.softest;
+        m[1].level_sigma_db = 2.0;
+        let weighed = fit(&m, 15.0).unwrap().0.softest;
+        assert!((plain - 0.55).abs() > 0.004, "{plain}");
+        assert!(
+            (weighed - 0.55).abs() < 0.3 * (plain - 0.55).abs(),
+            "{weighed} {plain}"
+        );
     }
 }

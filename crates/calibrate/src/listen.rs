@@ -78,6 +78,20 @@ pub(crate) struct Heard {
     pub onsets_ms: Vec<f64>,
     /// The first onset's level, dB.
     pub level_db: Option<f64>,
+    /// How far the noise may move that level, dB (one standard deviation, roughly): see
+    /// [`level_sigma_db`].
+    pub level_sigma_db: Option<f64>,
+}
+
+/// The standard deviation, dB, of a level measured as the mean string power `mean` over
+/// [`LEVEL_MS`] of frames `frame_ms` long, where the key's noise frames' string power
+/// scatters by `noise_sigma`: the noise alone (`noise_sigma / mean`) and the string beating
+/// with it (`2 noise_sigma / mean`, its square root: the cross term of signal and noise
+/// goes with both amplitudes), averaged over the independent frames in the span.
+pub(crate) fn level_sigma_db(mean: f64, noise_sigma: f64, frame_ms: f64) -> f64 {
+    let r = noise_sigma / mean.max(1e-20);
+    let independent = (LEVEL_MS as f64 + frame_ms) / frame_ms.max(1.0);
+    10.0 / std::f64::consts::LN_10 * (r * r + 2.0 * r).sqrt() / independent.sqrt()
 }
 
 /// Listens for `note`'s strikes expected at `expected_ms` (recording time).
@@ -183,6 +197,7 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
             let mut onsets_ms = Vec::new();
             let mut timings = Vec::new();
             let mut level_db = None;
+            let mut level_sigma = None;
             for i in kept {
                 // The string's power before the onset (frames wholly before it) and its peak.
                 let pre_hi = i.saturating_sub(hm + 10);
@@ -225,6 +240,7 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
                     let hi = (lo + LEVEL_MS).min(count);
                     let mean = string[lo..hi].iter().sum::<f64>() / (hi - lo).max(1) as f64;
                     level_db = Some(10.0 * mean.max(1e-20).log10());
+                    level_sigma = Some(level_sigma_db(mean, string_sigma, 2.0 * half_ms));
                 }
                 onsets_ms.push(t);
             }
@@ -232,6 +248,7 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
                 Heard {
                     onsets_ms,
                     level_db,
+                    level_sigma_db: level_sigma,
                 },
                 timings,
             )

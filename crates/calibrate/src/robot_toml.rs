@@ -3,8 +3,8 @@
 //!
 //! For each key that was fitted: `mechanics.key`'s `press_delay` (and on a PWM key its
 //! `soft_press_delay` and `softest`); on a PWM key, `dynamics.key`'s `softest` (the fitted
-//! softest plus [`SOFTEST_MARGIN`], so velocity 1 still sounds when the fit is a little
-//! low), `loudest` = 100 % (velocity 127 at full power: then the loudness heard is the
+//! softest plus [`SOFTEST_MARGIN_STEPS`] of the key's own velocity steps, so velocity 1 still
+//! sounds when the fit is a little low), `loudest` = 100 % (velocity 127 at full power: then the loudness heard is the
 //! velocity asked) and `hold` (the file's, lowered to the softest if it was above it). Other
 //! fields of a key's entries are kept; keys not fitted keep what the file gave them.
 //! Comments of the input file are not kept.
@@ -12,10 +12,25 @@
 use crate::analyze::Calibration;
 use crate::CalibrateError;
 
-/// Added to a key's fitted softest duty for its velocity curve, per cent: so velocity 1
-/// still sounds when the fit comes out a little low, at the cost of about 1.5 velocity steps
-/// at the soft end (the synthetic recordings' curves stay within 2.5 steps with it).
-pub const SOFTEST_MARGIN: f64 = 0.5;
+/// Added to a key's fitted softest duty for its velocity curve, in the key's own velocity
+/// steps (one step is `(1 − softest) / 126` of full power): so velocity 1 still sounds when
+/// the fit comes out a little low.
+///
+/// A curve that starts `m` steps above the key's true softest is `m` steps loud at velocity
+/// 1 and exact at 127 (linear between), and one that starts below it leaves velocity 1
+/// silent; so a curve within 3 steps needs the written softest within 0 to 3 steps above
+/// the true one, and a margin of 1.5 steps puts the fit's error in the middle of that, ±1.5
+/// steps either way. (A fixed share of full power, 0.5 % before, is 1.05 steps on a key
+/// whose softest is 40 % but 2.5 on one at 75 %: its curve went over 3 steps when the fit
+/// was 0.1 % high.)
+pub const SOFTEST_MARGIN_STEPS: f64 = 1.5;
+
+/// The softest duty written in `[[dynamics.key]]` for a fitted softest, per cent: the fit
+/// plus [`SOFTEST_MARGIN_STEPS`] of the key's velocity steps.
+pub fn written_softest_percent(fitted_percent: f64) -> f64 {
+    let step = (100.0 - fitted_percent).max(0.0) / 126.0;
+    (fitted_percent + SOFTEST_MARGIN_STEPS * step).min(100.0)
+}
 
 /// The calibrated robot.toml for the robot file `input` (its text).
 pub fn calibrated(input: &str, cal: &Calibration) -> Result<String, CalibrateError> {
@@ -82,7 +97,7 @@ pub fn calibrated(input: &str, cal: &Calibration) -> Result<String, CalibrateErr
                 ms(f.soft_press_delay_ms.max(f.press_delay_ms)),
             );
             m.insert("softest".into(), pct(f.softest_percent));
-            let softest = (f.softest_percent + SOFTEST_MARGIN).min(100.0);
+            let softest = written_softest_percent(f.softest_percent);
             let d = entry(&mut dyns, k.note);
             d.insert("softest".into(), pct(softest));
             d.insert("loudest".into(), pct(100.0));
@@ -132,4 +147,17 @@ pub fn calibrated(input: &str, cal: &Calibration) -> Result<String, CalibrateErr
         CalibrateError::Internal(format!("the calibrated robot.toml does not load: {e}"))
     })?;
     Ok(text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_margin_is_in_the_keys_own_steps() {
+        // 1.5 steps of (100 − softest) / 126 each.
+        assert!((written_softest_percent(40.0) - (40.0 + 1.5 * 60.0 / 126.0)).abs() < 1e-9);
+        assert!((written_softest_percent(75.0) - (75.0 + 1.5 * 25.0 / 126.0)).abs() < 1e-9);
+        assert_eq!(written_softest_percent(100.0), 100.0);
+    }
 }

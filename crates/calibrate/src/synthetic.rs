@@ -322,6 +322,11 @@ pub struct Errors {
     pub velocity_max_steps: f64,
     /// The median over keys of each key's largest velocity error.
     pub velocity_median_steps: f64,
+    /// Keys whose velocity curve is more than 3 steps off somewhere (issue 19's bound), or
+    /// whose velocity 1 makes no sound.
+    pub velocity_over_3: Vec<u8>,
+    /// Of those, the keys whose velocity 1 makes no sound.
+    pub velocity_1_silent: Vec<u8>,
     /// Keys whose softest sounding level is not the hidden one.
     pub softest_wrong: Vec<u8>,
     /// Keys that sounded but were not fitted.
@@ -377,6 +382,12 @@ pub fn errors(
             } else {
                 (heard - f64::from(v)).abs()
             });
+        }
+        if worst > 3.0 {
+            e.velocity_over_3.push(note);
+        }
+        if !hidden.sounds_at(duty(calibrated, note, 1)) {
+            e.velocity_1_silent.push(note);
         }
         per_key_velocity.push(worst);
     }
