@@ -6,8 +6,9 @@
 //! - **When a key strikes, and how loud**: each [`Press`](orch_sim::Press) of the
 //!   performance whose `sounded` is `Some`: the virtual robot's own time for the hammer
 //!   reaching the string (the pin going high plus the key's press delay at the strike's
-//!   duty), and `velocity`, its loudness on the MIDI velocity scale (1 at the key's softest
-//!   duty, 127 at full power; every on/off key strikes at 127). A press with `sounded: None`
+//!   duty), and `loudness`, exactly, on the MIDI velocity scale (1 at the key's softest
+//!   duty, 127 at full power, linear in the duty: not rounded to whole steps; every on/off
+//!   key strikes at 127). A press with `sounded: None`
 //!   (too short to reach the string, or `too_soft` on a PWM key) makes no sound, and a note
 //!   the interpreter dropped or joined to a key already down has no press of its own: so
 //!   dropped, joined and too-soft notes are silent, and late ones sound late, exactly as the
@@ -35,17 +36,17 @@
 //! strikes it again, as a piano with one string per note would).
 
 use orch_seq::Song;
-use orch_sim::{Performance, SoundKind};
+use orch_sim::{Loudness, Performance, SoundKind};
 
 use crate::error::RenderError;
 
 /// What happens to a key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Action {
-    /// The hammer strikes the string, this loud (1..=127, MIDI velocity's scale).
+    /// The hammer strikes the string, this loud (1..=127, MIDI velocity's scale, exactly).
     Strike {
-        /// Loudness, 1..=127.
-        velocity: u8,
+        /// How loud.
+        loudness: Loudness,
     },
     /// The damper falls: the key is fully up again.
     Release,
@@ -103,9 +104,9 @@ pub fn from_performance(
         .map(|p| p.key)
         .max()
         .map_or(0, |k| k as usize + 1);
-    let mut loudness: Vec<Vec<(u64, u8)>> = vec![Vec::new(); keys];
+    let mut loudness: Vec<Vec<(u64, Loudness)>> = vec![Vec::new(); keys];
     for p in &performance.presses {
-        if let (Some(at), Some(v)) = (p.sounded, p.velocity) {
+        if let (Some(at), Some(v)) = (p.sounded, p.loudness) {
             loudness[p.key as usize].push((at.as_nanos(), v));
         }
     }
@@ -127,7 +128,7 @@ pub fn from_performance(
         let action = match s.kind {
             SoundKind::Up => Action::Release,
             SoundKind::Down => {
-                let (at, velocity) = loudness
+                let (at, strength) = loudness
                     .get_mut(s.key as usize)
                     .and_then(Vec::pop)
                     .ok_or_else(|| {
@@ -142,7 +143,7 @@ pub fn from_performance(
                         s.key, s.time
                     )));
                 }
-                Action::Strike { velocity }
+                Action::Strike { loudness: strength }
             }
         };
         events.push(KeyEvent {
@@ -171,7 +172,9 @@ pub fn from_song(song: &Song) -> Vec<KeyEvent> {
             events.push(KeyEvent {
                 at_ns,
                 note,
-                action: Action::Strike { velocity },
+                action: Action::Strike {
+                    loudness: Loudness::of_velocity(velocity),
+                },
             });
         } else if let Some((_, note)) = e.bytes.note_off() {
             let note = note & 0x7F;
@@ -239,12 +242,16 @@ mod tests {
                 KeyEvent {
                     at_ns: 0,
                     note: 60,
-                    action: Action::Strike { velocity: 100 }
+                    action: Action::Strike {
+                        loudness: Loudness::of_velocity(100)
+                    }
                 },
                 KeyEvent {
                     at_ns: 500 * ms,
                     note: 60,
-                    action: Action::Strike { velocity: 50 }
+                    action: Action::Strike {
+                        loudness: Loudness::of_velocity(50)
+                    }
                 },
                 KeyEvent {
                     at_ns: 1500 * ms,

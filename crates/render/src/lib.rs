@@ -37,12 +37,16 @@
 //! are SoundFont 2.
 //!
 //! ```no_run
-//! use orch_render::{events, soundfont, synth, wav};
+//! use orch_render::{events, soundfont, synth, wav, Loudness};
 //! # fn main() -> Result<(), orch_render::RenderError> {
 //! let font = soundfont::load(&soundfont::find(None)?)?;
 //! // Middle C struck at 0.5 s at velocity 100, released at 1.5 s.
 //! let keys = [
-//!     events::KeyEvent { at_ns: 500_000_000, note: 60, action: events::Action::Strike { velocity: 100 } },
+//!     events::KeyEvent {
+//!         at_ns: 500_000_000,
+//!         note: 60,
+//!         action: events::Action::Strike { loudness: Loudness::of_velocity(100) },
+//!     },
 //!     events::KeyEvent { at_ns: 1_500_000_000, note: 60, action: events::Action::Release },
 //! ];
 //! let settings = synth::Settings::default();
@@ -69,5 +73,6 @@ pub mod wav;
 
 pub use error::RenderError;
 pub use events::{Action, KeyEvent};
+pub use orch_sim::Loudness;
 pub use rustysynth::SoundFont;
 pub use synth::{render, Rendered, Settings};

@@ -25,9 +25,12 @@
 //! (1.4 ms at 44.1 kHz) after the key's return (whose own release delay is tens of ms); the
 //! sound then dies away by the soundfont's release (rustysynth makes it 10 ms at the least,
 //! against clicks). A strike on a key still sounding ends the sound it had where the new one
-//! begins (one string per key). Successive strikes of a key take turns over 15 MIDI
-//! channels (all playing the piano), so that one strike's release never touches another's
-//! voice.
+//! begins (one string per key). A strike never takes the synthesizer and channel of its
+//! key's previous strike (15 MIDI channels, all playing the piano), so that one strike's
+//! release never touches another's voice.
+//!
+//! **Loudness.** Each strike sounds at its exact loudness, not at a whole velocity step: see
+//! [`expression_share`].
 //!
 //! **Dry.** No reverberation or chorus (the synthesizer's effects are off): a silence between
 //! notes is digital silence once the notes' releases have died away (rustysynth ends a voice
@@ -70,21 +73,59 @@ pub const MAX_TAIL_S: u32 = 30;
 const POLYPHONY: usize = 256;
 /// The General MIDI program every key plays: 0, Acoustic Grand Piano.
 const PROGRAM: i32 = 0;
-/// The synthesizer velocity loudness 1 plays at. See [`synth_velocity`].
+/// The synthesizer velocity loudness 1 plays at. See [`voice_for`].
 pub const SOFTEST_VELOCITY: u8 = 16;
 
-/// The synthesizer's velocity for a loudness on the MIDI velocity scale (1..=127).
+/// The synthesizer's velocity, fractional, for a loudness on the MIDI velocity scale
+/// (1.0..=127.0): loudness 1..=127 linearly as [`SOFTEST_VELOCITY`]..=127.
 ///
 /// rustysynth's gain goes with the square of velocity, (v/127)²: −84 dB at 1, and a voice
 /// under −60 dB is never started, so velocities below about 4 (more with a soundfont's own
 /// attenuation) make no sound at all. On the robot, loudness 1 is a key's softest sound, a
-/// sound all the same. So loudness 1..=127 plays linearly as velocity
-/// [`SOFTEST_VELOCITY`]..=127 (16: −36 dB, about a piano's range from its softest to its
-/// loudest), for the robot and the score alike.
-pub fn synth_velocity(loudness: u8) -> u8 {
-    let l = u32::from(loudness.clamp(1, 127));
-    let span = 127 - u32::from(SOFTEST_VELOCITY);
-    (u32::from(SOFTEST_VELOCITY) + ((l - 1) * span + 63) / 126) as u8
+/// sound all the same. So loudness 1..=127 plays as velocity 16..=127 (16: −36 dB, about a
+/// piano's range from its softest to its loudest), for the robot and the score alike.
+pub fn synth_velocity(loudness: f64) -> f64 {
+    let l = loudness.clamp(1.0, 127.0);
+    let soft = f64::from(SOFTEST_VELOCITY);
+    soft + (127.0 - soft) * (l - 1.0) / 126.0
+}
+
+/// Each channel's expression (controller 11 and 43, 14 bits), as a share of the default's
+/// (127 × 128): a ladder from 1 down to 16/17, geometric.
+///
+/// **Loudness between velocity's whole steps.** A strike's loudness is not a whole step
+/// ([`orch_sim::Loudness`]), but a synthesizer's velocity is. rustysynth's gain is
+/// `(velocity × expression)²` (times the channel's volume, the same on every channel), and a
+/// channel's expression holds for every voice on it, so each of the 15 channels keeps its own
+/// expression for the whole render, from this ladder, and a strike takes the channel and the
+/// whole velocity whose product is nearest to its fractional velocity ([`voice_for`]). One
+/// velocity step is 1/16 of the velocity at 16, and the ladder's 15 rungs split that: every
+/// loudness sounds within 0.04 dB of its exact level (whole velocities alone: 0.27 dB; a
+/// level's error of 0.2 dB is a whole velocity step at the soft end of a key's range).
+pub fn expression_share(channel: usize) -> f64 {
+    (16.0f64 / 17.0).powf(channel as f64 / CHANNELS.len() as f64)
+}
+
+/// The channel index (into the render's 15 channels) and whole velocity that play
+/// `loudness` nearest to its exact level, other than on the channel `not` (a key's previous
+/// strike's on the same synthesizer, see the [module notes](self): then within 0.08 dB).
+pub fn voice_for(loudness: f64, not: Option<usize>) -> (usize, u8) {
+    let want = synth_velocity(loudness);
+    let mut best = (f64::INFINITY, 0, 127);
+    for c in (0..CHANNELS.len()).filter(|&c| Some(c) != not) {
+        let f = expression_share(c);
+        let v = (want / f).round().clamp(1.0, 127.0);
+        let err = (v * f / want).ln().abs();
+        if err < best.0 {
+            best = (err, c, v as u8);
+        }
+    }
+    (best.1, best.2)
+}
+
+/// The 14-bit expression of channel index `c`.
+fn expression(c: usize) -> u16 {
+    (f64::from(127u16 << 7) * expression_share(c)).round() as u16
 }
 
 /// How to render.
@@ -140,9 +181,10 @@ struct Lane {
     right: Vec<f32>,
 }
 
-/// The MIDI channels voices are spread over, every one playing [`PROGRAM`]: successive
-/// strikes of one key take turns, so releasing one strike's voice never touches another's
-/// (channel 10, index 9, is the drums' in General MIDI: not used).
+/// The MIDI channels voices are spread over, every one playing [`PROGRAM`], each at its own
+/// expression ([`expression_share`]); a key's successive strikes never share one, so
+/// releasing one strike's voice never touches another's (channel 10, index 9, is the drums'
+/// in General MIDI: not used).
 const CHANNELS: [u8; 15] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 12, 13, 14, 15];
 
 /// The synthesizer settings every render and lead measurement uses.
@@ -161,8 +203,11 @@ pub(crate) fn synthesizer(
 ) -> Result<Synthesizer, RenderError> {
     let mut synth = Synthesizer::new(font, s).map_err(|e| RenderError::Synth(e.to_string()))?;
     synth.set_master_volume(gain);
-    for ch in CHANNELS {
+    for (c, ch) in CHANNELS.into_iter().enumerate() {
         synth.process_midi_message(ch.into(), 0xC0, PROGRAM, 0);
+        let e = expression(c);
+        synth.process_midi_message(ch.into(), 0xB0, 0x0B, i32::from(e >> 7));
+        synth.process_midi_message(ch.into(), 0xB0, 0x2B, i32::from(e & 0x7F));
     }
     Ok(synth)
 }
@@ -199,7 +244,7 @@ pub fn render(
         .collect();
     order.sort_unstable();
     let mut holder: [Option<(usize, u8, u64)>; 128] = [None; 128];
-    let mut turn = [0usize; 128];
+    let mut last_voice: [Option<(usize, usize)>; 128] = [None; 128];
     let mut cmds: Vec<Vec<(u64, Cmd)>> = (0..PHASES).map(|_| Vec::new()).collect();
     let mut out = Rendered::default();
     let mut last = 0u64;
@@ -208,24 +253,29 @@ pub fn render(
         let note = e.note & 0x7F;
         let n = usize::from(note);
         let start = match e.action {
-            Action::Strike { velocity } => {
-                let v = synth_velocity(velocity);
-                let lead = leads.of(note, v)?;
+            Action::Strike { loudness } => {
+                let (mut c, mut v) = voice_for(loudness.get(), None);
+                let mut lead = leads.of(note, v)?;
+                // Never the synthesizer and channel of the key's previous strike.
+                let lane = |lead: u64| (at.saturating_sub(lead) % PHASES as u64) as usize;
+                if last_voice[n] == Some((lane(lead), c)) {
+                    (c, v) = voice_for(loudness.get(), Some(c));
+                    lead = leads.of(note, v)?;
+                }
+                last_voice[n] = Some((lane(lead), c));
                 out.lead_max = out.lead_max.max(lead);
-                Some((at.saturating_sub(lead), v))
+                Some((at.saturating_sub(lead), v, CHANNELS[c]))
             }
             Action::Release => None,
         };
         // The sound this key had ends at its key-up, or where a new strike begins.
         if let Some((q, ch, began)) = holder[n].take() {
-            let off = start.map_or(at, |(s, _)| s).max(began);
+            let off = start.map_or(at, |(s, _, _)| s).max(began);
             cmds[q].push((off - q as u64, Cmd::Off(ch, note)));
             last = last.max(off);
         }
-        if let Some((begin, v)) = start {
+        if let Some((begin, v, ch)) = start {
             let p = (begin % PHASES as u64) as usize;
-            let ch = CHANNELS[turn[n] % CHANNELS.len()];
-            turn[n] += 1;
             cmds[p].push((begin - p as u64, Cmd::On(ch, note, v)));
             holder[n] = Some((p, ch, begin));
             out.strikes += 1;
@@ -337,12 +387,43 @@ mod tests {
 
     #[test]
     fn every_loudness_has_a_velocity_that_sounds_and_louder_is_louder() {
-        assert_eq!(synth_velocity(1), SOFTEST_VELOCITY);
-        assert_eq!(synth_velocity(127), 127);
-        assert_eq!(synth_velocity(0), SOFTEST_VELOCITY);
-        for l in 2..=127u8 {
-            assert!(synth_velocity(l) >= synth_velocity(l - 1), "{l}");
+        assert_eq!(synth_velocity(1.0), f64::from(SOFTEST_VELOCITY));
+        assert_eq!(synth_velocity(127.0), 127.0);
+        assert_eq!(synth_velocity(0.0), f64::from(SOFTEST_VELOCITY));
+        for l in 2..=127 {
+            assert!(
+                synth_velocity(f64::from(l)) > synth_velocity(f64::from(l - 1)),
+                "{l}"
+            );
         }
-        assert!(synth_velocity(64) > synth_velocity(20));
+    }
+
+    /// The level (dB) rustysynth gives a voice at `velocity` on channel index `c`, against
+    /// velocity 127 on channel 0: `(velocity × expression)²`, the expression as sent (14 bits).
+    fn level_db(c: usize, velocity: u8) -> f64 {
+        let e = f64::from(expression(c)) / f64::from(127u16 << 7);
+        40.0 * (f64::from(velocity) / 127.0 * e).log10()
+    }
+
+    #[test]
+    fn every_loudness_sounds_within_four_hundredths_of_a_db_of_its_exact_level() {
+        let (mut worst, mut worst_not): (f64, f64) = (0.0, 0.0);
+        for i in 100..=12_700 {
+            let loudness = f64::from(i) / 100.0;
+            let exact = 40.0 * (synth_velocity(loudness) / 127.0).log10();
+            let (c, v) = voice_for(loudness, None);
+            worst = worst.max((level_db(c, v) - exact).abs());
+            for not in 0..CHANNELS.len() {
+                let (c, v) = voice_for(loudness, Some(not));
+                assert_ne!(c, not);
+                worst_not = worst_not.max((level_db(c, v) - exact).abs());
+            }
+        }
+        assert!(worst < 0.04, "{worst} dB");
+        assert!(worst_not < 0.08, "{worst_not} dB");
+        // The loudest is velocity 127 at the default expression; whole velocities alone
+        // would be up to 0.27 dB off.
+        assert_eq!(voice_for(127.0, None), (0, 127));
+        assert_eq!(expression(0), 127 << 7);
     }
 }

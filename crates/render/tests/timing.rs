@@ -248,3 +248,59 @@ fn a_late_restrike_sounds_late_by_the_accounts_lateness() {
         heard - at(late.t_ms)
     );
 }
+
+#[test]
+fn a_strikes_level_follows_its_exact_loudness_between_whole_steps() {
+    // A key whose softest duty is 1000 of 4095: a 4095th more duty is 0.04 of a velocity step
+    // louder. Strikes 1 s apart, each held 0.5 s, at duties 3 of 4095 apart (0.12 step).
+    let key = orch_sim::KeyMechanics {
+        softest: 1000,
+        ..orch_sim::KeyMechanics::DEFAULT
+    };
+    let duties: Vec<u16> = (0..40).map(|i| 1300 + 3 * i).collect();
+    let mut keys = Vec::new();
+    for (i, &d) in duties.iter().enumerate() {
+        let at_ns = 1_000_000_000 * i as i64 + 100_000_000;
+        let loudness = key.loudness_at(d).unwrap();
+        keys.push(events::KeyEvent {
+            at_ns,
+            note: 60,
+            action: events::Action::Strike { loudness },
+        });
+        keys.push(events::KeyEvent {
+            at_ns: at_ns + 500_000_000,
+            note: 60,
+            action: events::Action::Release,
+        });
+    }
+    let (mut l, mut r) = (Vec::new(), Vec::new());
+    synth::render(
+        &support::square_font(RATE),
+        &keys,
+        &Settings::default(),
+        |a, b| {
+            l.extend_from_slice(a);
+            r.extend_from_slice(b);
+            Ok(())
+        },
+    )
+    .unwrap();
+    // Each strike's level in the audio, against its exact loudness's: the same offset for
+    // every strike, within 0.08 dB (the channels' expression ladder: each within 0.04 dB; at
+    // whole velocity steps, a step here is 0.65 dB).
+    let offsets: Vec<f64> = keys
+        .iter()
+        .filter_map(|k| match k.action {
+            events::Action::Strike { loudness } => Some((k.sample(RATE) as usize, loudness)),
+            events::Action::Release => None,
+        })
+        .map(|(at, loudness)| {
+            let heard = 20.0 * f64::from(onset::rms(&l, &r, at + 1000, at + 11_000)).log10();
+            let want = 40.0 * (synth::synth_velocity(loudness.get()) / 127.0).log10();
+            heard - want
+        })
+        .collect();
+    let spread = offsets.iter().copied().fold(f64::MIN, f64::max)
+        - offsets.iter().copied().fold(f64::MAX, f64::min);
+    assert!(spread < 0.08, "levels off their loudness by {offsets:?}");
+}

@@ -54,7 +54,8 @@ pub use bus::{
     BusClock, BusError, BusStats, BusWrite, Chip, DutyChange, PinChange, SimTime, VirtualBus,
 };
 pub use mechanics::{
-    KeyMechanics, Mechanics, MechanicsConfig, MechanicsStats, Press, SoundEvent, SoundKind,
+    KeyMechanics, Loudness, Mechanics, MechanicsConfig, MechanicsStats, Press, SoundEvent,
+    SoundKind,
 };
 pub use pca9555::Pca9555;
 pub use pca9685::Pca9685;

@@ -114,17 +114,70 @@ impl KeyMechanics {
         Duration::from_micros(us.max(0) as u32)
     }
 
-    /// The loudness of a strike at `duty` on the MIDI velocity scale (1..=127), if it sounds.
+    /// The loudness of a strike at `duty` on the MIDI velocity scale (1..=127), if it sounds:
+    /// [`loudness_at`](Self::loudness_at) to the nearest whole step.
     pub fn velocity_at(&self, duty: u16) -> Option<u8> {
+        self.loudness_at(duty).map(Loudness::velocity)
+    }
+
+    /// The exact loudness of a strike at `duty`, if it sounds.
+    pub fn loudness_at(&self, duty: u16) -> Option<Loudness> {
         if !self.sounds_at(duty) {
             return None;
         }
-        let span = Self::FULL.saturating_sub(self.softest) as u32;
-        if span == 0 {
-            return Some(127);
+        let span = Self::FULL.saturating_sub(self.softest);
+        Some(Loudness {
+            above: duty.min(Self::FULL) - self.softest,
+            span,
+        })
+    }
+}
+
+/// How loud a strike sounds, exactly, on the MIDI velocity scale: 1 at the key's softest
+/// duty, 127 at full power, linear in the duty between. A solenoid's strike is not made in
+/// whole steps: [`Press::velocity`] is this to the nearest step (what reports show), and
+/// `orch render` plays this (so a strike's sound follows its duty to the 4095th).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Loudness {
+    /// The strike's duty above the key's softest, 4095ths.
+    above: u16,
+    /// Full power above the key's softest, 4095ths (0: a key that sounds only at full power).
+    span: u16,
+}
+
+impl Loudness {
+    /// Full power: 127.
+    pub const LOUDEST: Self = Self { above: 0, span: 0 };
+
+    /// Exactly a MIDI velocity, 1..=127 (0 is taken as 1): a score's note as written.
+    pub fn of_velocity(velocity: u8) -> Self {
+        Self {
+            above: u16::from(velocity.clamp(1, 127)) - 1,
+            span: 126,
         }
-        let above = (duty.min(Self::FULL) - self.softest) as u32;
-        Some((1 + (126 * above + span / 2) / span) as u8)
+    }
+
+    /// On the velocity scale, 1.0..=127.0.
+    pub fn get(self) -> f64 {
+        if self.span == 0 {
+            return 127.0;
+        }
+        1.0 + 126.0 * f64::from(self.above) / f64::from(self.span)
+    }
+
+    /// To the nearest whole step, 1..=127 (a half step rounds up).
+    pub fn velocity(self) -> u8 {
+        if self.span == 0 {
+            return 127;
+        }
+        let (above, span) = (u32::from(self.above), u32::from(self.span));
+        (1 + (126 * above + span / 2) / span) as u8
+    }
+}
+
+impl Serialize for Loudness {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_f64(self.get())
     }
 }
 
@@ -204,8 +257,11 @@ pub struct Press {
     pub smeared: bool,
     /// The strike's duty, in 4095ths ([`KeyMechanics::FULL`] on an on/off board).
     pub duty: u16,
-    /// How loud it sounded, on the MIDI velocity scale (1..=127); `None` if it made no sound.
+    /// How loud it sounded, on the MIDI velocity scale (1..=127, to the nearest step);
+    /// `None` if it made no sound.
     pub velocity: Option<u8>,
+    /// How loud it sounded, exactly; `None` if it made no sound.
+    pub loudness: Option<Loudness>,
     /// It made no sound because its duty was below the key's softest.
     pub too_soft: bool,
 }
@@ -407,6 +463,11 @@ impl Mechanics {
                     } else {
                         None
                     },
+                    loudness: if sounds {
+                        figures.loudness_at(strike)
+                    } else {
+                        None
+                    },
                     too_soft,
                 });
                 if too_soft {
@@ -526,6 +587,23 @@ mod tests {
         assert_eq!(k.velocity_at(4095), Some(127));
         assert_eq!(k.velocity_at(1843), Some(1));
         assert_eq!(k.velocity_at(1842), None);
+        // Exact between the steps; the velocity is it to the nearest step.
+        assert_eq!(k.loudness_at(1843).unwrap().get(), 1.0);
+        assert_eq!(k.loudness_at(4095).unwrap().get(), 127.0);
+        assert!(
+            (k.loudness_at(2000).unwrap().get() - (1.0 + 126.0 * 157.0 / 2252.0)).abs() < 1e-12
+        );
+        for duty in 1843..=4095 {
+            let exact = k.loudness_at(duty).unwrap();
+            assert_eq!(exact.velocity(), k.velocity_at(duty).unwrap());
+            assert!(
+                (f64::from(exact.velocity()) - exact.get()).abs() <= 0.5,
+                "duty {duty}"
+            );
+        }
+        assert_eq!(Loudness::of_velocity(64).get(), 64.0);
+        assert_eq!(Loudness::of_velocity(64).velocity(), 64);
+        assert_eq!(Loudness::of_velocity(0).get(), 1.0);
         let mut last = (Duration::from_millis(31), 0);
         for duty in 1843..=4095 {
             let (d, v) = (k.press_delay_at(duty), k.velocity_at(duty).unwrap());
