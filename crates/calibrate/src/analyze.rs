@@ -250,7 +250,13 @@ pub fn analyze(
             .iter()
             .map(|s| f64::from(s.at_ms) + offset)
             .collect();
-        let heard = listen(&rec.samples, rec.rate, note, &expected);
+        let heard = listen(
+            &rec.samples,
+            rec.rate,
+            note,
+            &expected,
+            f64::from(crate::score::NOTE_MS),
+        );
         let touch = robot.config.dynamics.keys[usize::from(note - low)];
         let file = robot.mechanics.for_key(note - low);
         let mut problems = Vec::new();

@@ -20,7 +20,11 @@
 //!   the key's threshold: it rises with the noise.
 //! - **Peaks**: the flux's maxima within ±10 ms above the threshold; maxima closer than the
 //!   frame (or 50 ms) are one onset; a peak below 15 % of the window's largest is a ripple
-//!   (an echo, a beat between partials), not an onset.
+//!   (an echo, a beat between partials), not an onset. After the first onset, another counts
+//!   only if the sharp timing (below) finds an abrupt rise there, as a hammer's is: a
+//!   reverberant room's swell at a high key's partial as its direct sound dies (seen 70–270
+//!   ms after the strike at 30 and 40 dB SNR, twice the string power of the 15 ms before)
+//!   has none.
 //! - **The string**: the key's *string power*, the partials' bins' power less as many times
 //!   the between bins' mean power (broadband noise, a mechanical thump, a click add to both
 //!   and cancel). An onset counts only if the string power after it rises by at least 8
@@ -47,8 +51,12 @@
 //!   moved by the key's own offset between the two timings (the median over its strikes
 //!   where both were taken): the key's strikes are the same string, so the envelope's bias
 //!   is the same.
-//! - **Level**: the mean string power of the frames that lie wholly in the 50 ms after the
-//!   onset, in dB (mean-square power; 0 dB is a full-scale square wave).
+//! - **Level**: the mean string power of the frames from the onset on, in dB (mean-square
+//!   power; 0 dB is a full-scale square wave), over a span that is the same for every strike
+//!   of the key: 100 ms, or less so that the last frame is centred before the pin of the
+//!   key's slowest strike goes low (30 ms at least; the damper falls a release delay later,
+//!   under the frame's tail at most): a damper that fell inside one strike's span would read
+//!   that strike low.
 
 use crate::envelope::Demod;
 use crate::onset::{median, robust_sigma};
@@ -62,10 +70,16 @@ const FLUX_LAMBDA: f64 = 6.0;
 const STRING_LAMBDA: f64 = 8.0;
 /// A peak this share of the window's largest, or more, is an onset of its own.
 const RIPPLE: f64 = 0.15;
-/// The level is the string power over this long after the onset, ms (100 ms averaged a soft
-/// strike's noise down on rendered recordings, but let the synthetic strings' faster-decaying
-/// upper partials bias it: no better on the whole).
-const LEVEL_MS: usize = 50;
+/// The level is the mean string power over the frames from the onset on, this long at most,
+/// ms: the same span for every strike of a key, its last frame centred before the key's pin
+/// goes low ([`listen`]'s `held_ms`), so a damper falling a strike's release delay later never counts
+/// (a slow, soft strike has less time before it: a span that ran into it read that strike
+/// low). 100 ms averages a soft strike's noise down (50 ms: a standard deviation of 0.08 dB
+/// over the levels at 30 dB SNR in a reverberant room, 100 ms: 0.05).
+const LEVEL_MAX_MS: f64 = 100.0;
+/// ... and this long at least, where the key is held too briefly for more (a bass key's long
+/// frames, a slow strike).
+const LEVEL_MIN_MS: f64 = 30.0;
 /// Listening window around the expected onset, ms.
 pub(crate) const BEFORE_MS: i64 = 150;
 /// Listening window after the expected onset, ms.
@@ -84,18 +98,25 @@ pub(crate) struct Heard {
 }
 
 /// The standard deviation, dB, of a level measured as the mean string power `mean` over
-/// [`LEVEL_MS`] of frames `frame_ms` long, where the key's noise frames' string power
+/// `span_ms` of frames `frame_ms` long, where the key's noise frames' string power
 /// scatters by `noise_sigma`: the noise alone (`noise_sigma / mean`) and the string beating
 /// with it (`2 noise_sigma / mean`, its square root: the cross term of signal and noise
 /// goes with both amplitudes), averaged over the independent frames in the span.
-pub(crate) fn level_sigma_db(mean: f64, noise_sigma: f64, frame_ms: f64) -> f64 {
+pub(crate) fn level_sigma_db(mean: f64, noise_sigma: f64, frame_ms: f64, span_ms: f64) -> f64 {
     let r = noise_sigma / mean.max(1e-20);
-    let independent = (LEVEL_MS as f64 + frame_ms) / frame_ms.max(1.0);
+    let independent = (span_ms + frame_ms) / frame_ms.max(1.0);
     10.0 / std::f64::consts::LN_10 * (r * r + 2.0 * r).sqrt() / independent.sqrt()
 }
 
-/// Listens for `note`'s strikes expected at `expected_ms` (recording time).
-pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec<Heard> {
+/// Listens for `note`'s strikes expected at `expected_ms` (recording time), each held
+/// `held_ms` from then (its pin going low: the damper falls a release delay later).
+pub(crate) fn listen(
+    x: &[f32],
+    rate: u32,
+    note: u8,
+    expected_ms: &[f64],
+    held_ms: f64,
+) -> Vec<Heard> {
     let band = KeyBand::new(note, rate);
     let f0 = 440.0 * 2f64.powf((f64::from(note) - 69.0) / 12.0);
     let mut stft = Stft::new(band.n);
@@ -139,12 +160,15 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
 
     let half_ms = band.n as f64 / 2.0 / per_ms;
     let merge_ms = (2.0 * half_ms).max(50.0);
-    let mut heard: Vec<(Heard, Vec<Timing>)> = expected_ms
+    let mut heard: Vec<(Heard, Vec<Timing>, Strings)> = expected_ms
         .iter()
         .map(|&e| {
             // Frames every 1 ms from e - BEFORE - LAG to e + AFTER + frame.
             let start = e - (BEFORE_MS + LAG_MS) as f64;
-            let count = (BEFORE_MS + LAG_MS + AFTER_MS) as usize + (2.0 * half_ms) as usize + 60;
+            let count = (BEFORE_MS + LAG_MS + AFTER_MS) as usize
+                + (2.0 * half_ms) as usize
+                + LEVEL_MAX_MS as usize
+                + 10;
             let mut logs: Vec<Vec<f64>> = Vec::with_capacity(count);
             let mut string = Vec::with_capacity(count);
             for i in 0..count {
@@ -196,8 +220,7 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
             let hm = half_ms.round() as usize;
             let mut onsets_ms = Vec::new();
             let mut timings = Vec::new();
-            let mut level_db = None;
-            let mut level_sigma = None;
+            let mut level_from = None;
             for i in kept {
                 // The string's power before the onset (frames wholly before it) and its peak.
                 let pre_hi = i.saturating_sub(hm + 10);
@@ -229,36 +252,59 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
                 // spread (a part of the key's period, and what a reverberant room adds).
                 let near = NEAR_PERIODS * 1000.0 / f0 + NEAR_MS;
                 let sharp = sharp.filter(|&(t, _)| (t - t_env).abs() <= near);
+                // A second strike is a hammer's: an abrupt rise of the upper partials. A
+                // slow swell (a reverberant room's, as the direct sound dies) is none.
+                if !onsets_ms.is_empty() && sharp.is_none() {
+                    continue;
+                }
                 let t = match sharp {
                     Some((t, ratio)) if ratio >= SHARP_RATIO => t,
                     _ => t_env,
                 };
                 timings.push(Timing { t_env, sharp });
-                if level_db.is_none() {
-                    let from = (t + half_ms).ceil() as usize;
-                    let lo = ((from as f64 - start).max(0.0)) as usize;
-                    let hi = (lo + LEVEL_MS).min(count);
-                    let mean = string[lo..hi].iter().sum::<f64>() / (hi - lo).max(1) as f64;
-                    level_db = Some(10.0 * mean.max(1e-20).log10());
-                    level_sigma = Some(level_sigma_db(mean, string_sigma, 2.0 * half_ms));
+                if level_from.is_none() {
+                    level_from = Some(t);
                 }
                 onsets_ms.push(t);
             }
             (
                 Heard {
                     onsets_ms,
-                    level_db,
-                    level_sigma_db: level_sigma,
+                    level_db: None,
+                    level_sigma_db: None,
                 },
                 timings,
+                Strings {
+                    string,
+                    start,
+                    level_from,
+                    held_until: e + held_ms,
+                },
             )
         })
         .collect();
+    // Each strike's level over the key's common span: its first frame starts at the onset,
+    // its last is centred before the pin of the key's slowest strike goes low.
+    let frame_ms = 2.0 * half_ms;
+    let span_ms = heard
+        .iter()
+        .filter_map(|(_, _, s)| s.level_from.map(|t| s.held_until - t - half_ms))
+        .fold(LEVEL_MAX_MS, f64::min)
+        .max(LEVEL_MIN_MS);
+    for (h, _, s) in &mut heard {
+        if let Some(t) = s.level_from {
+            let lo = (t + half_ms - s.start).ceil().max(0.0) as usize;
+            let hi = (lo + span_ms.round() as usize + 1).min(s.string.len());
+            let mean = s.string[lo.min(hi)..hi].iter().sum::<f64>() / (hi - lo).max(1) as f64;
+            h.level_db = Some(10.0 * mean.max(1e-20).log10());
+            h.level_sigma_db = Some(level_sigma_db(mean, string_sigma, frame_ms, span_ms));
+        }
+    }
     // The envelope's offset from the sharp timing, from the key's clear strikes, for the
     // others.
     let mut offsets: Vec<f64> = heard
         .iter()
-        .flat_map(|(_, ts)| ts.iter())
+        .flat_map(|(_, ts, _)| ts.iter())
         .filter_map(|t| match t.sharp {
             Some((s, ratio)) if ratio >= SHARP_RATIO => Some(s - t.t_env),
             _ => None,
@@ -266,7 +312,7 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
         .collect();
     if !offsets.is_empty() {
         let offset = median(&mut offsets);
-        for (h, ts) in &mut heard {
+        for (h, ts, _) in &mut heard {
             for (o, t) in h.onsets_ms.iter_mut().zip(ts.iter()) {
                 if !matches!(t.sharp, Some((_, r)) if r >= SHARP_RATIO) {
                     *o = t.t_env + offset;
@@ -274,7 +320,19 @@ pub(crate) fn listen(x: &[f32], rate: u32, note: u8, expected_ms: &[f64]) -> Vec
             }
         }
     }
-    heard.into_iter().map(|(h, _)| h).collect()
+    heard.into_iter().map(|(h, _, _)| h).collect()
+}
+
+/// One strike's string power, a frame each ms, for its level.
+struct Strings {
+    /// The frames' string power.
+    string: Vec<f64>,
+    /// The first frame's centre, ms in the recording.
+    start: f64,
+    /// Where its level is measured from: its first onset, ms.
+    level_from: Option<f64>,
+    /// When its pin goes low, ms in the recording (on the figure's clock).
+    held_until: f64,
 }
 
 /// How one onset was timed.

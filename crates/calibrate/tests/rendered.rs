@@ -27,10 +27,16 @@ fn room(seed: u64) -> Room {
     }
 }
 
-fn calibrate(text: &str, hidden: &Hidden, silent: Option<u8>, anchor_note: u8) -> Calibration {
+fn calibrate(
+    text: &str,
+    hidden: &Hidden,
+    silent: Option<u8>,
+    anchor_note: u8,
+    room: &Room,
+) -> Calibration {
     let robot = Robot::from_toml(text).unwrap();
     let score = Score::for_robot(&robot, 4).unwrap();
-    let rec = rendered::record(&score, hidden, &rendered::string_font(), &room(3), silent);
+    let rec = rendered::record(&score, hidden, &rendered::string_font(), room, silent);
     let low = robot.config.range.low().get();
     let anchor = Anchor {
         note: anchor_note,
@@ -39,26 +45,43 @@ fn calibrate(text: &str, hidden: &Hidden, silent: Option<u8>, anchor_note: u8) -
     analyze(&rec, &robot, &score, Some(anchor)).unwrap()
 }
 
-/// The 61-key robot's hidden figures and its calibration, made once for the tests that use
-/// them.
+/// The 61-key robot's hidden figures, and its calibration in room 3, made once for the
+/// tests that use them.
 fn full_robot() -> &'static (Hidden, Calibration) {
     static FULL: std::sync::OnceLock<(Hidden, Calibration)> = std::sync::OnceLock::new();
     FULL.get_or_init(|| {
         let hidden = rendered::hidden(&pwm_text(), (0.40, 0.75), 5);
-        let cal = calibrate(&pwm_text(), &hidden, None, 60);
+        let cal = calibrate(&pwm_text(), &hidden, None, 60, &room(3));
         (hidden, cal)
     })
 }
 
 #[test]
 fn calibration_on_rendered_sound_recovers_hidden_delays_curves_and_softest() {
+    let (hidden, cal) = full_robot();
+    recovers(hidden, cal, &room(3));
+}
+
+/// The same robot in two more rooms (their noise and reverberation drawn from other seeds):
+/// in room 6 a high key's partial swells 70 ms after its strike (the reverberation against
+/// the dying direct sound), which must not count as a second strike.
+#[test]
+fn calibration_on_rendered_sound_holds_in_other_rooms() {
+    let (hidden, _) = full_robot();
+    for seed in [1, 6] {
+        let cal = calibrate(&pwm_text(), hidden, None, 60, &room(seed));
+        recovers(hidden, &cal, &room(seed));
+    }
+}
+
+fn recovers(hidden: &Hidden, cal: &Calibration, room: &Room) {
     let text = pwm_text();
     let robot = Robot::from_toml(&text).unwrap();
     let score = Score::for_robot(&robot, 4).unwrap();
-    let (hidden, cal) = full_robot();
+    let seed = room.seed;
     // The capture offset holds the method's common bias, which the anchor takes out.
     assert!(
-        (cal.capture_offset_ms - room(3).offset_ms()).abs() < 5.0,
+        (cal.capture_offset_ms - room.offset_ms()).abs() < 5.0,
         "{}",
         cal.capture_offset_ms
     );
@@ -73,20 +96,24 @@ fn calibration_on_rendered_sound_recovers_hidden_delays_curves_and_softest() {
     let out = robot_toml::calibrated(&text, cal).unwrap();
     let calibrated = Robot::from_toml(&out).unwrap();
     let e = errors(cal, &calibrated, &robot, &hidden.keys, &score);
-    assert!(e.missed.is_empty(), "keys missed: {:?}", e.missed);
+    assert!(
+        e.missed.is_empty(),
+        "room {seed}: keys missed: {:?}",
+        e.missed
+    );
     assert!(
         e.softest_wrong.is_empty(),
-        "softest wrong: {:?}",
+        "room {seed}: softest wrong: {:?}",
         e.softest_wrong
     );
     // Every key's press delay within 1 ms; each strike's within 1.5 ms (1.05 at most in the
     // figures' rooms).
-    assert!(e.press_delay_max_ms <= 1.0, "{e:?}");
-    assert!(e.delay_max_ms <= 1.5, "{e:?}");
+    assert!(e.press_delay_max_ms <= 1.0, "room {seed}: {e:?}");
+    assert!(e.delay_max_ms <= 1.5, "room {seed}: {e:?}");
     // The velocity curves: each key's written curve, played on the hidden key, within 3 steps
     // of the velocity asked over 1..=127, velocity 1 sounding.
-    assert!(e.velocity_over_3.len() <= 3, "{e:?}");
-    assert!(e.velocity_median_steps <= 2.0, "{e:?}");
+    assert!(e.velocity_over_3.is_empty(), "room {seed}: {e:?}");
+    assert!(e.velocity_max_steps <= 3.0, "room {seed}: {e:?}");
 }
 
 #[test]
@@ -95,7 +122,7 @@ fn a_key_that_never_sounds_on_rendered_sound_is_named() {
     let text =
         "[keys]\nlow = 60\nhigh = 71\n[[boards]]\nkind = \"pca9685\"\naddress = 0x40\nkeys = 12\n";
     let hidden = rendered::hidden(text, (0.40, 0.75), 8);
-    let cal = calibrate(text, &hidden, Some(64), 60);
+    let cal = calibrate(text, &hidden, Some(64), 60, &room(3));
     let dead = cal.keys.iter().find(|k| k.note == 64).unwrap();
     assert!(dead.fit.is_none(), "{dead:?}");
     assert!(

@@ -49,7 +49,9 @@ pub fn string_font() -> Arc<SoundFont> {
     sf2(&string_sample())
 }
 
-/// One struck string at middle C, 44.1 kHz, 1.5 s: 10 partials `h f0 √(1 + B h²)` (B =
+/// One struck string at middle C, 44.1 kHz, 4 s (so that at C7, played 8 times as fast, it
+/// lasts 500 ms, past a strike's listening window: a sample ending sooner clicks there, a
+/// second onset no string makes): 10 partials `h f0 √(1 + B h²)` (B =
 /// 10⁻⁴), amplitudes `1/h`, random phases, each decaying with a time constant of `0.8 s /
 /// (1 + 0.4 (h − 1))`; it starts at full level on its first sample (the hammer's contact),
 /// peak 0.5 of full scale.
@@ -65,7 +67,7 @@ pub fn string_sample() -> Vec<i16> {
             (f, 1.0 / h, 0.8 / (1.0 + 0.4 * (h - 1.0)), phase)
         })
         .collect();
-    let x: Vec<f64> = (0..(1.5 * rate) as usize)
+    let x: Vec<f64> = (0..(4.0 * rate) as usize)
         .map(|n| {
             let t = n as f64 / rate;
             partials
