@@ -30,9 +30,11 @@ pub struct Measured {
     pub level_sigma_db: f64,
 }
 
-/// The level's own uncertainty, dB, besides the noise: the virtual robot's loudness and the
-/// synthesizer's velocity are whole steps (0.3 dB a velocity step at a middle loudness), a
-/// uniform error of half a step either way.
+/// The level's own uncertainty, dB, besides the noise: what the model leaves out (a real
+/// key's loudness is not exactly linear in its duty) and what the noise's estimate misses (a
+/// level's scatter at 30 dB SNR in a reverberant room is about 0.05 dB where its noise
+/// frames say 0.01–0.04): without it the loudest level, nearly noiseless, would outweigh the
+/// others without measure.
 pub const LEVEL_FLOOR_DB: f64 = 0.1;
 
 /// A key's fitted figures (delays on the analysis' clock, before the anchor).
