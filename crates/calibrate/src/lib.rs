@@ -38,7 +38,9 @@
 //! the key's period (the onset's click spreads over each band); the broadband energy can, to
 //! a fraction of its window. A strike too soft for the energy to rise clearly (15 dB) is
 //! timed on the envelope moved by the key's own offset between the two (from its louder
-//! strikes). The level is the string power over the 50 ms after the onset. Every parameter,
+//! strikes). The level is the string power from the onset on, over one span for all of a
+//! key's strikes (100 ms, or less so that it ends before its slowest strike's pin goes low);
+//! a second onset for one strike counts only where it rises abruptly. Every parameter,
 //! and why, is in the `listen` and `envelope` modules' source notes.
 //!
 //! # Real rooms
@@ -55,6 +57,9 @@
 //!   onset's peak. The direct sound comes first, so the sharp timing's rise is the direct
 //!   sound's; the partials' envelope crossing moves with the early reflections (±2 ms at a
 //!   direct-to-reverberant ratio of 0 dB), which is why it only guides the sharp timing.
+//!   As the direct sound dies, a high key's partial can swell against the reverberation to
+//!   twice its power, with a flux peak over 15 % of the strike's: a second onset counts only
+//!   where the sharp timing finds an abrupt rise, which a swell has not.
 //! - **A mechanical thump before the string**: a click of a few ms spreads its energy over
 //!   the whole spectrum, so the partials' narrow bands, on whose envelope the onset is first
 //!   timed, get little of it next to the string's; its flux peak, a frame or less before the
