@@ -72,7 +72,7 @@ const STRING_LAMBDA: f64 = 8.0;
 const RIPPLE: f64 = 0.15;
 /// The level is the mean string power over the frames from the onset on, this long at most,
 /// ms: the same span for every strike of a key, its last frame centred before the key's pin
-/// goes low ([`listen`]'s `held_ms`), so a damper falling a strike's release delay later never counts
+/// goes low ([`listen`]'s `held_ms`), so a damper falling a release delay later never counts
 /// (a slow, soft strike has less time before it: a span that ran into it read that strike
 /// low). 100 ms averages a soft strike's noise down (50 ms: a standard deviation of 0.08 dB
 /// over the levels at 30 dB SNR in a reverberant room, 100 ms: 0.05).
