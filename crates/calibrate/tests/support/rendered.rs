@@ -84,106 +84,25 @@ pub fn string_sample() -> Vec<i16> {
         .collect()
 }
 
-fn chunk(id: &[u8; 4], body: &[u8]) -> Vec<u8> {
-    let mut v = id.to_vec();
-    v.extend_from_slice(&(body.len() as u32).to_le_bytes());
-    v.extend_from_slice(body);
-    if body.len() % 2 == 1 {
-        v.push(0);
-    }
-    v
-}
-
-fn list(kind: &[u8; 4], chunks: &[Vec<u8>]) -> Vec<u8> {
-    let mut body = kind.to_vec();
-    for c in chunks {
-        body.extend_from_slice(c);
-    }
-    chunk(b"LIST", &body)
-}
-
-fn name20(name: &str) -> Vec<u8> {
-    let mut v = name.as_bytes().to_vec();
-    v.resize(20, 0);
-    v
-}
-
 /// A SoundFont 2 with one preset (bank 0, program 0) playing `wave` (44.1 kHz, root key 60)
 /// on every key, once, with no envelope delay or attack.
 fn sf2(wave: &[i16]) -> Arc<SoundFont> {
-    let len = wave.len() as u32;
-    let mut data = wave.to_vec();
-    data.extend(std::iter::repeat_n(0, 46)); // the 46 zero samples the format asks after each
-    let smpl: Vec<u8> = data.iter().flat_map(|s| s.to_le_bytes()).collect();
-    let mut phdr = name20("string");
-    phdr.extend_from_slice(&[0, 0, 0, 0, 0, 0]); // preset 0, bank 0, bag 0
-    phdr.extend_from_slice(&[0; 12]);
-    phdr.extend_from_slice(&name20("EOP"));
-    phdr.extend_from_slice(&[0, 0, 0, 0, 1, 0]);
-    phdr.extend_from_slice(&[0; 12]);
-    let pbag = [0u8, 0, 0, 0, 1, 0, 0, 0];
-    let pmod = [0u8; 10];
-    let mut pgen = Vec::new();
-    pgen.extend_from_slice(&41u16.to_le_bytes()); // instrument 0
-    pgen.extend_from_slice(&0u16.to_le_bytes());
-    pgen.extend_from_slice(&[0; 4]);
-    let mut inst = name20("string");
-    inst.extend_from_slice(&0u16.to_le_bytes());
-    inst.extend_from_slice(&name20("EOI"));
-    inst.extend_from_slice(&1u16.to_le_bytes());
-    let ibag = [0u8, 0, 0, 0, 5, 0, 0, 0];
-    let imod = [0u8; 10];
-    let mut igen = Vec::new();
-    // delayVolEnv and attackVolEnv at their shortest (-32768 timecents: none).
-    for generator in [33u16, 34] {
-        igen.extend_from_slice(&generator.to_le_bytes());
-        igen.extend_from_slice(&0x8000u16.to_le_bytes());
-    }
-    // releaseVolEnv: -1200 timecents, 0.5 s for 100 dB (a damper's 43 ms time constant).
-    igen.extend_from_slice(&38u16.to_le_bytes());
-    igen.extend_from_slice(&(-1200i16).to_le_bytes());
-    igen.extend_from_slice(&54u16.to_le_bytes()); // sampleModes: not looped
-    igen.extend_from_slice(&0u16.to_le_bytes());
-    igen.extend_from_slice(&53u16.to_le_bytes()); // sampleID 0
-    igen.extend_from_slice(&0u16.to_le_bytes());
-    igen.extend_from_slice(&[0; 4]);
-    let mut shdr = name20("string");
-    for v in [0u32, len, 0, len, RATE] {
-        shdr.extend_from_slice(&v.to_le_bytes());
-    }
-    shdr.extend_from_slice(&[60, 0, 0, 0, 1, 0]); // root 60, no correction, no link, mono
-    shdr.extend_from_slice(&name20("EOS"));
-    shdr.extend_from_slice(&[0; 26]);
-    let info = list(
-        b"INFO",
+    use sf2::*;
+    one_sample(
+        wave,
+        RATE,
         &[
-            chunk(b"ifil", &[2, 0, 1, 0]),
-            chunk(b"isng", b"EMU8000\0"),
-            chunk(b"INAM", b"orch calibration test\0"),
+            (DELAY_VOL_ENV, NO_TIME),
+            (ATTACK_VOL_ENV, NO_TIME),
+            // -1200 timecents, 0.5 s for 100 dB (a damper's 43 ms time constant).
+            (RELEASE_VOL_ENV, -1200),
+            (SAMPLE_MODES, 0), // not looped
         ],
-    );
-    let sdta = list(b"sdta", &[chunk(b"smpl", &smpl)]);
-    let pdta = list(
-        b"pdta",
-        &[
-            chunk(b"phdr", &phdr),
-            chunk(b"pbag", &pbag),
-            chunk(b"pmod", &pmod),
-            chunk(b"pgen", &pgen),
-            chunk(b"inst", &inst),
-            chunk(b"ibag", &ibag),
-            chunk(b"imod", &imod),
-            chunk(b"igen", &igen),
-            chunk(b"shdr", &shdr),
-        ],
-    );
-    let mut body = b"sfbk".to_vec();
-    body.extend_from_slice(&info);
-    body.extend_from_slice(&sdta);
-    body.extend_from_slice(&pdta);
-    let riff = chunk(b"RIFF", &body);
-    Arc::new(SoundFont::new(&mut riff.as_slice()).expect("the test font parses"))
+    )
 }
+
+#[path = "../../../render/tests/support/sf2.rs"]
+mod sf2;
 
 /// A robot with hidden per-key mechanics.
 pub struct Hidden {
