@@ -49,6 +49,15 @@ async fn click(c: &Client, id: &str) {
     testid(c, id).await.click().await.unwrap();
 }
 
+/// Chooses `file` in the page's upload field, as a person picking it would.
+async fn upload(c: &Client, file: &Path) {
+    testid(c, "upload")
+        .await
+        .send_keys(file.to_str().unwrap())
+        .await
+        .unwrap();
+}
+
 /// The page loaded, its WebSocket's first state drawn (the keys are there).
 async fn open(c: &Client, s: &Served) {
     c.goto(&s.url).await.unwrap();
@@ -116,11 +125,7 @@ fn an_upload_is_analysed_as_orch_analyze_says_and_a_malformed_file_changes_nothi
         let c = driver.browser(390, 844).await;
         open(&c, &s).await;
         let file = corpus("freedoom2-in-cit.mid");
-        testid(&c, "upload")
-            .await
-            .send_keys(file.to_str().unwrap())
-            .await
-            .unwrap();
+        upload(&c, &file).await;
         wait_for(
             &c,
             "the analysis",
@@ -308,11 +313,7 @@ fn a_performance_is_drawn_live_in_the_accounts_order_on_two_browsers_and_its_rep
         let b = driver.browser(1024, 768).await;
         open(&a, &s).await;
         open(&b, &s).await;
-        testid(&a, "upload")
-            .await
-            .send_keys(file.to_str().unwrap())
-            .await
-            .unwrap();
+        upload(&a, &file).await;
         wait_for(
             &a,
             "the analysis",
@@ -426,11 +427,7 @@ fn stop_releases_every_key_at_once_on_the_page_and_on_a_udp_output() {
     runtime().block_on(async {
         let c = driver.browser(390, 844).await;
         open(&c, &s).await;
-        testid(&c, "upload")
-            .await
-            .send_keys(file.to_str().unwrap())
-            .await
-            .unwrap();
+        upload(&c, &file).await;
         wait_for(
             &c,
             "the analysis",
@@ -518,11 +515,7 @@ fn the_controls_play_from_a_bar_on_the_roll_pause_set_the_tempo_and_jump() {
     runtime().block_on(async {
         let c = driver.browser(390, 844).await;
         open(&c, &s).await;
-        testid(&c, "upload")
-            .await
-            .send_keys(file.to_str().unwrap())
-            .await
-            .unwrap();
+        upload(&c, &file).await;
         wait_for(
             &c,
             "the roll",
