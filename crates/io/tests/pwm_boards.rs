@@ -155,7 +155,7 @@ fn every_strike_reaches_its_channel_at_its_velocitys_duty_and_every_channel_ends
     let asked: Vec<u8> = played.records.iter().map(|r| r.velocity).collect();
     let mut heard: Vec<(orch_sim::SimTime, u8)> = presses
         .iter()
-        .map(|p| (p.pin_high, p.velocity.expect("every strike sounds")))
+        .map(|p| (p.pin_high, p.velocity().expect("every strike sounds")))
         .collect();
     heard.sort();
     for (h, a) in heard.iter().zip(&asked) {

@@ -289,7 +289,7 @@ impl Ledger {
         }
         queue.pop_front();
         let e = &mut self.notes[id as usize];
-        e.sounded_velocity = p.velocity;
+        e.sounded_velocity = p.velocity();
         e.outcome = match p.sounded {
             Some(t) => {
                 let err = (t.as_nanos() / 1000) as i64 - e.score_at_us;

@@ -146,9 +146,6 @@ pub struct Loudness {
 }
 
 impl Loudness {
-    /// Full power: 127.
-    pub const LOUDEST: Self = Self { above: 0, span: 0 };
-
     /// Exactly a MIDI velocity, 1..=127 (0 is taken as 1): a score's note as written.
     pub fn of_velocity(velocity: u8) -> Self {
         Self {
@@ -257,13 +254,19 @@ pub struct Press {
     pub smeared: bool,
     /// The strike's duty, in 4095ths ([`KeyMechanics::FULL`] on an on/off board).
     pub duty: u16,
-    /// How loud it sounded, on the MIDI velocity scale (1..=127, to the nearest step);
-    /// `None` if it made no sound.
-    pub velocity: Option<u8>,
-    /// How loud it sounded, exactly; `None` if it made no sound.
+    /// How loud it sounded, exactly; `None` if it made no sound. [`Press::velocity`] is it to
+    /// the nearest step.
     pub loudness: Option<Loudness>,
     /// It made no sound because its duty was below the key's softest.
     pub too_soft: bool,
+}
+
+impl Press {
+    /// How loud it sounded, on the MIDI velocity scale (1..=127, to the nearest step); `None`
+    /// if it made no sound.
+    pub fn velocity(&self) -> Option<u8> {
+        self.loudness.map(Loudness::velocity)
+    }
 }
 
 /// What the mechanics counted.
@@ -458,11 +461,6 @@ impl Mechanics {
                     sounded: sounds.then(|| since + delay),
                     smeared,
                     duty: strike,
-                    velocity: if sounds {
-                        figures.velocity_at(strike)
-                    } else {
-                        None
-                    },
                     loudness: if sounds {
                         figures.loudness_at(strike)
                     } else {
@@ -617,8 +615,8 @@ mod tests {
         m.press_duty(ms(240), 0, 1433); // the hold changes nothing heard
         m.press_duty(ms(400), 0, 0);
         let p = m.presses().to_vec();
-        assert!(p[0].too_soft && p[0].sounded.is_none() && p[0].velocity.is_none());
-        assert_eq!(p[1].velocity, Some(64));
+        assert!(p[0].too_soft && p[0].sounded.is_none() && p[0].velocity().is_none());
+        assert_eq!(p[1].velocity(), Some(64));
         assert_eq!(p[1].sounded, Some(SimTime::from_micros(222_500)));
         assert_eq!(p[1].duty, 2969);
         assert_eq!(m.stats().too_soft, 1);

@@ -75,7 +75,7 @@ fn a_velocity_sweep_sounds_in_order_of_loudness_at_the_velocity_asked() {
     let mut last = (0u8, u64::MAX);
     for (p, &(v, _)) in presses.iter().zip(&notes) {
         let sounded = p
-            .velocity
+            .velocity()
             .expect("every strike at or above the softest sounds");
         // The default curve (45..100 %) matches the default mechanics: the velocity asked,
         // within a step of rounding (4095ths).
@@ -110,9 +110,9 @@ fn a_strike_below_the_keys_own_softest_makes_no_sound() {
         presses[1].too_soft,
         "velocity 30 is 45 + 13 % = 58 % < 60 %"
     );
-    assert_eq!(presses[2].velocity, Some(127));
+    assert_eq!(presses[2].velocity(), Some(127));
     assert!(!presses[3].too_soft, "the next key sounds at 45 %");
-    assert_eq!(presses[3].velocity, Some(1));
+    assert_eq!(presses[3].velocity(), Some(1));
     let t = presses[2].sounded.unwrap();
     assert_eq!(t.nanos_since(presses[2].pin_high), 15_000_000);
     let _ = SimTime::ZERO;
