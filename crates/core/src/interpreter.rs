@@ -375,11 +375,9 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 .touch(key)
                 .strike_duty(self.velocity(key))
         } else {
-            self.config.dynamics.duty_at(
-                key,
-                self.velocity(key),
-                self.fingers.age(key, self.clock),
-            )
+            self.config
+                .dynamics
+                .duty_at(key, self.velocity(key), self.fingers.age(key, self.clock))
         };
         #[cfg(not(feature = "dynamics"))]
         return Duty::FULL;
@@ -1207,7 +1205,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             sink.note(NoteEvent::Waiting { channel, note, at });
             self.fingers.set_velocity(key, velocity.get());
             self.fingers.set_flag(key, FOLDED, folded);
-            self.fingers.set_flag(key, RELEASE_AFTER, self.is_strike(key));
+            self.fingers
+                .set_flag(key, RELEASE_AFTER, self.is_strike(key));
             return;
         }
         if phase == DOWN {
@@ -1411,7 +1410,11 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 let down = self.fingers.age(key, now);
                 #[cfg(feature = "dynamics")]
                 let energy = if self.is_strike(key) {
-                    let duty = self.config.dynamics.touch(key).strike_duty(self.velocity(key));
+                    let duty = self
+                        .config
+                        .dynamics
+                        .touch(key)
+                        .strike_duty(self.velocity(key));
                     (down as u64 * duty.get() as u64).div_ceil(Duty::FULL.get() as u64)
                 } else {
                     self.config.dynamics.energy(key, self.velocity(key), down)

@@ -166,7 +166,10 @@ impl Strikes {
     /// The pulse of `key`; [`Pulse::NONE`] for a keyboard key.
     #[inline]
     pub fn pulse(&self, key: u8) -> Pulse {
-        self.pulses.get(key as usize).copied().unwrap_or(Pulse::NONE)
+        self.pulses
+            .get(key as usize)
+            .copied()
+            .unwrap_or(Pulse::NONE)
     }
 
     /// The first key after the keyboard's `keyboard_keys` keys and the groups so far.
@@ -307,7 +310,10 @@ impl Strikes {
             let span = group.first..group.first + group.outputs;
             match group.notes {
                 StrikeNotes::Sparse => {
-                    if self.map[g].iter().any(|&k| k != 0 && !span.contains(&(k - 1))) {
+                    if self.map[g]
+                        .iter()
+                        .any(|&k| k != 0 && !span.contains(&(k - 1)))
+                    {
                         return Err(StrikeError::Map { group: group_no });
                     }
                 }

@@ -185,7 +185,10 @@ fn drum_notes_a_keyboard_leaves_alone_and_notes_the_kit_lacks_have_their_own_rea
     rig.feed(&hit(42, 100), ms(0));
     rig.feed(&[0x9A, 42, 100], ms(1)); // channel 11 is played
     let s = rig.robot.stats();
-    assert_eq!((s.dropped_percussion, s.dropped_channel, s.played), (1, 0, 1));
+    assert_eq!(
+        (s.dropped_percussion, s.dropped_channel, s.played),
+        (1, 0, 1)
+    );
     // The mixed robot: the kit plays 42, lacks 81 (open triangle).
     let mut rig = Rig::new(mixed(49, Pulse::DRUM));
     let mut events = Vec::new();
@@ -284,7 +287,8 @@ fn band_chunk() -> impl Strategy<Value = Vec<u8>> {
 }
 
 fn band_steps() -> impl Strategy<Value = Vec<common::Step>> {
-    let gap = prop_oneof![3 => Just(0u64), 4 => 0u64..30_000, 2 => 0u64..200_000, 1 => 0u64..5_000_000];
+    let gap =
+        prop_oneof![3 => Just(0u64), 4 => 0u64..30_000, 2 => 0u64..200_000, 1 => 0u64..5_000_000];
     prop::collection::vec(
         (gap, prop::option::weighted(0.9, band_chunk()))
             .prop_map(|(gap, bytes)| common::Step { gap, bytes }),
@@ -304,7 +308,10 @@ fn pulse() -> impl Strategy<Value = Pulse> {
 /// its last one; keys of the keyboard are not checked here.
 fn assert_strikes_kept(timeline: &[Edge], first_key: u8, pulse: Pulse, end: Instant) {
     let key_of = |e: &Edge| e.board * 16 + e.bit;
-    let (max, rebound) = (pulse.loud.as_micros() as u64, pulse.rebound.as_micros() as u64);
+    let (max, rebound) = (
+        pulse.loud.as_micros() as u64,
+        pulse.rebound.as_micros() as u64,
+    );
     let mut on: std::collections::HashMap<u8, u64> = Default::default();
     let mut last: std::collections::HashMap<u8, u64> = Default::default();
     for e in timeline.iter().filter(|e| key_of(e) >= first_key) {

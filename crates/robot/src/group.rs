@@ -77,6 +77,61 @@ pub fn note_name(note: u8) -> String {
     format!("{}{}", NAMES[note as usize % 12], note as i32 / 12 - 1)
 }
 
+/// General MIDI Level 1's name of percussion note `note` (35..=81) on channel 10: `Acoustic
+/// Snare` for 38.
+pub fn gm_drum_name(note: u8) -> Option<&'static str> {
+    const NAMES: [&str; 47] = [
+        "Acoustic Bass Drum",
+        "Bass Drum 1",
+        "Side Stick",
+        "Acoustic Snare",
+        "Hand Clap",
+        "Electric Snare",
+        "Low Floor Tom",
+        "Closed Hi-Hat",
+        "High Floor Tom",
+        "Pedal Hi-Hat",
+        "Low Tom",
+        "Open Hi-Hat",
+        "Low-Mid Tom",
+        "Hi-Mid Tom",
+        "Crash Cymbal 1",
+        "High Tom",
+        "Ride Cymbal 1",
+        "Chinese Cymbal",
+        "Ride Bell",
+        "Tambourine",
+        "Splash Cymbal",
+        "Cowbell",
+        "Crash Cymbal 2",
+        "Vibraslap",
+        "Ride Cymbal 2",
+        "Hi Bongo",
+        "Low Bongo",
+        "Mute Hi Conga",
+        "Open Hi Conga",
+        "Low Conga",
+        "High Timbale",
+        "Low Timbale",
+        "High Agogo",
+        "Low Agogo",
+        "Cabasa",
+        "Maracas",
+        "Short Whistle",
+        "Long Whistle",
+        "Short Guiro",
+        "Long Guiro",
+        "Claves",
+        "Hi Wood Block",
+        "Low Wood Block",
+        "Mute Cuica",
+        "Open Cuica",
+        "Mute Triangle",
+        "Open Triangle",
+    ];
+    NAMES.get(note.checked_sub(35)? as usize).copied()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -87,5 +142,14 @@ mod tests {
         assert_eq!(note_name(42), "F#2");
         assert_eq!(note_name(0), "C-1");
         assert_eq!(note_name(127), "G9");
+    }
+
+    #[test]
+    fn gm_drums_are_named_from_35_to_81() {
+        assert_eq!(gm_drum_name(35), Some("Acoustic Bass Drum"));
+        assert_eq!(gm_drum_name(42), Some("Closed Hi-Hat"));
+        assert_eq!(gm_drum_name(81), Some("Open Triangle"));
+        assert_eq!(gm_drum_name(34), None);
+        assert_eq!(gm_drum_name(82), None);
     }
 }

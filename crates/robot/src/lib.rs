@@ -30,7 +30,7 @@ mod strike;
 
 pub use error::RobotError;
 pub use file::MELODIC;
-pub use group::{note_name, Group, GroupKind};
+pub use group::{gm_drum_name, note_name, Group, GroupKind};
 pub use instrument::{instrument_toml, Instrument};
 
 /// The most boards a host configuration may have.
