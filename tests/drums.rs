@@ -110,7 +110,11 @@ fn assert_account_is_the_report(what: &str, report: &Value, lines: &[Value]) {
         assert_eq!(count("dropped", Some(reason)), n(k), "{what}: {reason}");
         total += n(k);
     }
-    assert_eq!(total, n(&report["notes"]) + n(&report["replayed"]), "{what}");
+    assert_eq!(
+        total,
+        n(&report["notes"]) + n(&report["replayed"]),
+        "{what}"
+    );
     assert_eq!(
         n(&report["strikes"]),
         n(&o["on_time"]) + n(&o["late"]),
@@ -191,7 +195,10 @@ fn the_drum_kit_plays_every_corpus_drum_part_honestly() {
     }
     eprintln!("drum notes {notes}: struck {struck}, on time {on_time}");
     assert!(struck * 10 >= notes * 7, "{struck} of {notes} struck");
-    assert!(on_time * 100 >= struck * 99, "{on_time} of {struck} on time");
+    assert!(
+        on_time * 100 >= struck * 99,
+        "{on_time} of {struck} on time"
+    );
 }
 
 #[test]
@@ -249,7 +256,9 @@ fn analyze_names_the_drum_notes_a_piano_leaves_alone_and_the_drums_a_kit_lacks()
     let pitch = |n: &str| {
         let rest = n.trim_start_matches(|c: char| ('A'..='G').contains(&c));
         let rest = rest.trim_start_matches('#');
-        rest.len() < n.len() && !rest.is_empty() && rest.chars().all(|c| c.is_ascii_digit() || c == '-')
+        rest.len() < n.len()
+            && !rest.is_empty()
+            && rest.chars().all(|c| c.is_ascii_digit() || c == '-')
     };
     assert!(
         report["outcomes"]["dropped"]["unmapped"].as_u64().unwrap() > 0,

@@ -3,11 +3,13 @@
 #[cfg(feature = "dynamics")]
 use crate::dynamics::Dynamics;
 use crate::dynamics::DynamicsError;
-use crate::keymap::{KeyRange, Layout, OutOfRange};
+use crate::keymap::{KeyOf, KeyRange, Layout, OutOfRange};
+use crate::outcome::DropReason;
 #[cfg(feature = "strike")]
 use crate::strike::{StrikeError, Strikes};
 use crate::time::Duration;
 use crate::values::ChannelMask;
+use crate::values::{Channel, Note};
 
 /// The longest any guard limit may be: 30 minutes. Per-key times are kept in 32 bits of
 /// microseconds (71 minutes), and the guard needs half that range to tell old from new.
@@ -330,6 +332,55 @@ impl<const B: usize> Config<B> {
             return 0;
         }
         self.range.keys()
+    }
+
+    /// Where a note on `channel` lands: a strike group's output, else the keyboard's key (see
+    /// [`strike`](crate::strike)), or why it does not play. Channel 10, General MIDI's
+    /// percussion, when nothing listens to it: [`DropReason::Percussion`].
+    #[inline(always)]
+    pub fn land(&self, channel: Channel, note: Note) -> Result<KeyOf, DropReason> {
+        #[cfg(feature = "strike")]
+        {
+            use crate::strike::StrikeMiss;
+            let miss = match self.strikes.find(channel, note) {
+                Some(Ok(of)) => return Ok(of),
+                Some(Err(StrikeMiss::Unmapped)) => Some(DropReason::Unmapped),
+                Some(Err(StrikeMiss::Range)) => Some(DropReason::Range),
+                None => None,
+            };
+            self.keyboard_key(channel, note)
+                .map_err(|reason| miss.unwrap_or(reason))
+        }
+        #[cfg(not(feature = "strike"))]
+        self.keyboard_key(channel, note)
+    }
+
+    /// The keyboard's key for a note on `channel`, or why it has none.
+    #[inline(always)]
+    fn keyboard_key(&self, channel: Channel, note: Note) -> Result<KeyOf, DropReason> {
+        if self.keyboard_keys() == 0 || !self.channels.contains(channel) {
+            return Err(if channel.get() == 9 {
+                DropReason::Percussion
+            } else {
+                DropReason::Channel
+            });
+        }
+        self.range
+            .key_for(note, self.out_of_range)
+            .ok_or(DropReason::Range)
+    }
+
+    /// Whether `key` is a strike group's output: a pulse that ends by itself, its Note-Off
+    /// ignored.
+    #[inline(always)]
+    pub fn is_strike(&self, key: u8) -> bool {
+        #[cfg(feature = "strike")]
+        return self.strikes.pulse(key).is_strike();
+        #[cfg(not(feature = "strike"))]
+        {
+            let _ = key;
+            false
+        }
     }
 
     /// Checks that an interpreter with room for `capacity` keys can run this configuration.

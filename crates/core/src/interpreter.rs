@@ -756,13 +756,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// pulse that ends by itself.
     #[inline(always)]
     fn is_strike(&self, key: u8) -> bool {
-        #[cfg(feature = "strike")]
-        return self.config.strikes.pulse(key).is_strike();
-        #[cfg(not(feature = "strike"))]
-        {
-            let _ = key;
-            false
-        }
+        self.config.is_strike(key)
     }
 
     /// How long a press of `key` flagged `RELEASE_AFTER` lasts, in µs: a strike output's
@@ -1038,41 +1032,9 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         }
     }
 
-    /// Where a note on `channel` goes: a strike group's output, else the keyboard's key, or
-    /// why it does not play. Channel 10, General MIDI's percussion, when nothing listens to
-    /// it: [`DropReason::Percussion`].
     #[inline(always)]
     fn route(&self, channel: Channel, note: Note) -> Result<KeyOf, DropReason> {
-        #[cfg(feature = "strike")]
-        {
-            use crate::strike::StrikeMiss;
-            let miss = match self.config.strikes.find(channel, note) {
-                Some(Ok(of)) => return Ok(of),
-                Some(Err(StrikeMiss::Unmapped)) => Some(DropReason::Unmapped),
-                Some(Err(StrikeMiss::Range)) => Some(DropReason::Range),
-                None => None,
-            };
-            self.keyboard_key(channel, note)
-                .map_err(|reason| miss.unwrap_or(reason))
-        }
-        #[cfg(not(feature = "strike"))]
-        self.keyboard_key(channel, note)
-    }
-
-    /// The keyboard's key for a note on `channel`, or why it has none.
-    #[inline(always)]
-    fn keyboard_key(&self, channel: Channel, note: Note) -> Result<KeyOf, DropReason> {
-        if self.config.keyboard_keys() == 0 || !self.config.channels.contains(channel) {
-            return Err(if channel.get() == 9 {
-                DropReason::Percussion
-            } else {
-                DropReason::Channel
-            });
-        }
-        self.config
-            .range
-            .key_for(note, self.config.out_of_range)
-            .ok_or(DropReason::Range)
+        self.config.land(channel, note)
     }
 
     fn note_on<S: NoteSink>(

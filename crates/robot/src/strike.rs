@@ -144,6 +144,17 @@ fn check(f: &Figures, prefix: &str) -> Result<(), RobotError> {
             ),
         ));
     }
+    let back = p.loud.as_micros() + f.mechanics.release_delay.as_micros();
+    if p.rebound.as_micros() < back {
+        return Err(RobotError::field(
+            format!("{prefix}rebound"),
+            format!(
+                "{} is shorter than pulse_loud + return_delay = {}: the beater would fire again before it is back",
+                ms(p.rebound),
+                ms(Duration::from_micros(back))
+            ),
+        ));
+    }
     if p.soft < f.mechanics.min_hold {
         return Err(RobotError::field(
             format!("{prefix}pulse_soft"),

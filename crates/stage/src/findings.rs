@@ -126,7 +126,12 @@ pub fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
         .filter(|e| e.bytes.note_on().is_some_and(|(ch, _, _)| ch == 9))
         .count();
     let ten = orch_core::Channel::new(9).expect("channel 10");
-    let kit_listens = robot.config.strikes.groups().iter().any(|g| g.channels.contains(ten));
+    let kit_listens = robot
+        .config
+        .strikes
+        .groups()
+        .iter()
+        .any(|g| g.channels.contains(ten));
     let keyboard = robot.config.keyboard_keys() > 0;
     if drums > 0 && keyboard && robot.config.channels.contains(ten) && !kit_listens {
         f.push(format!(
