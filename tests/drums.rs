@@ -177,6 +177,8 @@ fn the_drum_kit_plays_every_corpus_drum_part_honestly() {
     for file in drum_files() {
         let (report, lines, writes) = play(&kit, &file, &dir);
         assert_account_is_the_report(&file, &report, &lines);
+        assert_eq!(report["muted"], 0, "{file}: no beater rests on its head");
+        assert_eq!(report["too_short_to_sound"], 0, "{file}: no blank");
         // The kit's board is 0x21; its loudest pulse (the kick's) is 30 ms.
         assert_no_output_on_longer_than(&file, &writes, &[0x21], 30_000);
         assert_drum_notes_struck_or_mechanical(&file, &lines);

@@ -409,6 +409,7 @@ impl Played {
             peak_keys_down: s.peak_keys_down,
             too_short_to_sound: m.short_pulses,
             smeared: m.smeared_presses,
+            muted: m.muted,
             bus: Bus {
                 writes: bus.transactions,
                 bytes: bus.bytes,

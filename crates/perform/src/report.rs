@@ -278,6 +278,8 @@ pub struct Report {
     pub too_short_to_sound: u64,
     /// Presses that came before the key was back up.
     pub smeared: u64,
+    /// Strikes whose beater stayed on its drum head or bar long enough to choke it.
+    pub muted: u64,
     /// The bus.
     pub bus: Bus,
     /// The length of the performance, s.
@@ -398,6 +400,12 @@ impl Report {
             "too short to sound     {}   smeared presses {}",
             self.too_short_to_sound, self.smeared
         ));
+        if self.muted > 0 {
+            line(format!(
+                "muted strikes          {}   (a beater left on its head or bar)",
+                self.muted
+            ));
+        }
         line(format!(
             "bus                    {} writes, {} bytes, busy {:.3}% of {:.1} s",
             self.bus.writes, self.bus.bytes, self.bus.busy_percent, self.seconds

@@ -830,6 +830,7 @@ fn mechanics(m: &Mechanics, range: KeyRange) -> Result<MechanicsConfig, RobotErr
         min_hold: delay("mechanics.min_hold", &m.min_hold)?,
         softest: duty("mechanics.softest", &m.softest)?.get(),
         soft_press_delay: delay("mechanics.soft_press_delay", &m.soft_press_delay)?,
+        mute_after: None,
     };
     let low = range.low().get();
     let mut mechanics = MechanicsConfig::uniform(default);

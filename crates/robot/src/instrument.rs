@@ -81,6 +81,9 @@ first_bit = 0
 #     The performer sends each strike early by it, so it sounds on the beat.
 #   min_pulse: the shortest pulse that sounds; shorter fires a blank.
 #   return_delay: from the pulse's end until the beater is back at rest.
+#   mute_after: the longest a beater may stay powered against the head once it struck; longer
+#     chokes the sound (the virtual robot counts it as muted). 20 ms: the loudest pulses here
+#     rest on the head for at most 15 ms (the kick's 30 ms pulse less its 15 ms flight).
 # Each [[strike.output]] names its notes (General MIDI's drum map) and may give any of those
 # figures where it differs from the group's. A note the kit has no output for is dropped as
 # "unmapped".
@@ -94,6 +97,7 @@ flight = "10ms"
 soft_flight = "20ms"
 min_pulse = "4ms"
 return_delay = "15ms"
+mute_after = "20ms"
 
 [[strike.output]]
 name = "kick"
@@ -181,6 +185,8 @@ first_bit = 0
 #   flight: from the pulse's start to the bar sounding at full power (6 ms: the mallet sits
 #     close to its bar); soft_flight: at the softest duty (PCA9685 boards).
 #   min_pulse: the shortest pulse that sounds (3 ms); return_delay: back at rest after it.
+#   mute_after: the longest a mallet may stay powered on its bar once it struck: a bar rings
+#     only when the mallet leaves it, and the loudest pulse here rests on it 6 ms.
 # program: the General MIDI program `orch render` plays it with (10: glockenspiel).
 [[strike]]
 name = "glockenspiel"
@@ -196,6 +202,7 @@ flight = "6ms"
 soft_flight = "12ms"
 min_pulse = "3ms"
 return_delay = "10ms"
+mute_after = "10ms"
 "#;
 
 /// What every strike robot shares with the piano: bus, guard, PWM and dynamics.

@@ -28,6 +28,7 @@ pub(crate) struct StrikeFile {
     soft_flight: Option<String>,
     min_pulse: Option<String>,
     return_delay: Option<String>,
+    mute_after: Option<String>,
     #[serde(default)]
     output: Vec<OutputFile>,
 }
@@ -50,6 +51,7 @@ pub(crate) struct OutputFile {
     soft_flight: Option<String>,
     min_pulse: Option<String>,
     return_delay: Option<String>,
+    mute_after: Option<String>,
 }
 
 /// An output's figures: its pulse (core) and its beater's mechanics (virtual robot).
@@ -69,10 +71,11 @@ const DEFAULT_FIGURES: Figures = Figures {
         min_hold: Duration::from_millis(4),
         softest: KeyMechanics::DEFAULT.softest,
         soft_press_delay: Duration::from_millis(20),
+        mute_after: Some(Duration::from_millis(20)),
     },
 };
 
-/// The seven figure fields of a table, as written.
+/// The figure fields of a table, as written.
 struct Written<'a> {
     pulse_soft: &'a Option<String>,
     pulse_loud: &'a Option<String>,
@@ -81,6 +84,7 @@ struct Written<'a> {
     soft_flight: &'a Option<String>,
     min_pulse: &'a Option<String>,
     return_delay: &'a Option<String>,
+    mute_after: &'a Option<String>,
 }
 
 impl Written<'_> {
@@ -108,6 +112,9 @@ impl Written<'_> {
             self.return_delay,
             &mut f.mechanics.release_delay,
         )?;
+        if let Some(t) = self.mute_after {
+            f.mechanics.mute_after = Some(delay(&format!("{prefix}mute_after"), t)?);
+        }
         check(&f, prefix)?;
         Ok(f)
     }
@@ -178,6 +185,7 @@ impl StrikeFile {
             soft_flight: &self.soft_flight,
             min_pulse: &self.min_pulse,
             return_delay: &self.return_delay,
+            mute_after: &self.mute_after,
         }
     }
 }
@@ -192,6 +200,7 @@ impl OutputFile {
             soft_flight: &self.soft_flight,
             min_pulse: &self.min_pulse,
             return_delay: &self.return_delay,
+            mute_after: &self.mute_after,
         }
     }
 }

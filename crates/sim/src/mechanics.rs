@@ -52,6 +52,14 @@
 //! sounds each note at the velocity asked. The duty after the strike (the hold) changes
 //! nothing heard; a duty of 0 is the pin going low.
 //!
+//! ## Beaters: a muted strike
+//!
+//! A strike output's beater ([`KeyMechanics::mute_after`]) flies for its press delay, strikes,
+//! and must come off its drum head or bar: powered against it for longer than `mute_after`
+//! after it struck (the pin high past `press_delay + mute_after`), it chokes the sound. The
+//! strike still sounds, at its time, but [`Press::muted`] says so and
+//! [`MechanicsStats::muted`] counts it.
+//!
 //! [`Mechanics::finish`] takes every pin still high as going low at the end (counted in
 //! [`MechanicsStats::stuck_at_end`]) and emits every pending key-up, even past the end, so every
 //! key-down has its key-up.
@@ -77,6 +85,9 @@ pub struct KeyMechanics {
     pub softest: u16,
     /// The press delay of a strike at `softest` (`press_delay` is at full power).
     pub soft_press_delay: Duration,
+    /// A beater's (a strike output's): the longest it may stay powered against its drum head
+    /// or bar once it has struck before it mutes it; `None` for a key (held down by design).
+    pub mute_after: Option<Duration>,
 }
 
 impl KeyMechanics {
@@ -88,6 +99,7 @@ impl KeyMechanics {
         min_hold: Duration::from_millis(8),
         softest: 1843,
         soft_press_delay: Duration::from_millis(30),
+        mute_after: None,
     };
 
     /// Full power, in 4095ths.
@@ -259,6 +271,9 @@ pub struct Press {
     pub loudness: Option<Loudness>,
     /// It made no sound because its duty was below the key's softest.
     pub too_soft: bool,
+    /// A beater that sounded but stayed powered against its head or bar past its
+    /// `mute_after`: the sound was choked.
+    pub muted: bool,
 }
 
 impl Press {
@@ -282,6 +297,8 @@ pub struct MechanicsStats {
     pub short_pulses: u64,
     /// Presses whose strike duty was below the key's softest: no sound.
     pub too_soft: u64,
+    /// Strikes that sounded but whose beater stayed on its head or bar past `mute_after`.
+    pub muted: u64,
     /// Key-up events.
     pub key_ups: u64,
     /// Pins still high when [`Mechanics::finish`] was called.
@@ -454,6 +471,13 @@ impl Mechanics {
                 let too_soft = long && !figures.sounds_at(strike);
                 let sounds = long && !too_soft;
                 let delay = figures.press_delay_at(strike);
+                // Powered on past its contact by more than it may be: the bar is choked.
+                let muted = sounds
+                    && figures.mute_after.is_some_and(|m| {
+                        time.nanos_since(since)
+                            > (delay.as_micros() as u64 + m.as_micros() as u64) * 1_000
+                    });
+                self.stats.muted += u64::from(muted);
                 self.presses.push(Press {
                     key,
                     pin_high: since,
@@ -467,6 +491,7 @@ impl Mechanics {
                         None
                     },
                     too_soft,
+                    muted,
                 });
                 if too_soft {
                     self.stats.too_soft += 1;
@@ -542,6 +567,32 @@ mod tests {
         assert_eq!(ev[0].time, ms(15));
         assert_eq!(ev[0].kind, SoundKind::Down);
         assert_eq!(ev[1].time, ms(35));
+    }
+
+    #[test]
+    fn a_beater_left_on_its_bar_past_mute_after_is_muted_but_still_sounds() {
+        let beater = KeyMechanics {
+            press_delay: Duration::from_millis(6),
+            release_delay: Duration::from_millis(10),
+            min_hold: Duration::from_millis(3),
+            mute_after: Some(Duration::from_millis(10)),
+            ..KeyMechanics::DEFAULT
+        };
+        let mut m = Mechanics::new(1, &MechanicsConfig::uniform(beater));
+        // 12 ms: on the bar 6 ms. 16 ms: 10 ms, the most it may. 17 ms: muted.
+        for (at, len) in [(0, 12), (100, 16), (200, 17)] {
+            m.edge(ms(at), 0, true);
+            m.edge(ms(at + len), 0, false);
+        }
+        let muted: Vec<bool> = m.presses().iter().map(|p| p.muted).collect();
+        assert_eq!(muted, [false, false, true]);
+        assert!(m.presses().iter().all(|p| p.sounded.is_some()));
+        assert_eq!(m.stats().muted, 1);
+        // A key (no mute_after) is never muted however long it is held.
+        let mut k = Mechanics::new(1, &MechanicsConfig::default());
+        k.edge(ms(0), 0, true);
+        k.edge(ms(5_000), 0, false);
+        assert!(!k.presses()[0].muted);
     }
 
     #[test]

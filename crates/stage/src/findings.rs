@@ -36,7 +36,7 @@ pub fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
     ));
     let d = &o.dropped;
     let budget = robot.config.guard.max_keys_down;
-    let counted: [(u64, String); 16] = [
+    let counted: [(u64, String); 17] = [
         (
             o.joined,
             "notes land on a key already down for another note and make no sound of their own"
@@ -90,6 +90,12 @@ pub fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
         (
             r.smeared,
             "presses come before the key is back up and will smear".into(),
+        ),
+        (
+            r.muted,
+            "strikes keep their beater on the drum head or bar long enough to mute it \
+             (shorten the output's pulse_loud, or raise its mute_after if the robot does not)"
+                .into(),
         ),
         (
             d.cancelled,
