@@ -17,7 +17,11 @@ step "install: Debian packages, the firmware's nightly (firmware/install.sh), ru
 # General MIDI soundfont `orch render`'s tests play through (6 MB, GPL-2; never committed here:
 # installed in /usr/share/sounds/sf2). chromium and chromium-driver: `orch serve`'s browser tests
 # (tests/serve_browser.rs) drive headless Chromium through chromedriver.
-bash firmware/install.sh tmux libasound2-dev libclang-dev timgm6mb-soundfont chromium chromium-driver
+# gcc-aarch64-linux-gnu, libc6-dev-arm64-cross, qemu-user and systemd (systemd-analyze,
+# systemd-sysusers): the Raspberry Pi step (scripts/pi.sh) links orch for arm64, runs it, and
+# checks its systemd unit and package.
+bash firmware/install.sh tmux libasound2-dev libclang-dev timgm6mb-soundfont chromium chromium-driver \
+    gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user systemd
 if [ ! -e /dev/snd/seq ]; then
     echo "NOTE: this kernel offers no ALSA sequencer (/dev/snd/seq): the alsa output's real-port test skips (its encoder test runs)"
 fi
@@ -27,6 +31,10 @@ for component in clippy rustfmt; do
     grep -q "^$component" <<<"$installed" || rustup component add "$component"
 done
 rustup target list --installed | grep -qx thumbv6m-none-eabi || rustup target add thumbv6m-none-eabi
+# The Raspberry Pi step's target, and cargo-deb, which packs orch as a .deb (pinned: the
+# package's layout is what scripts/pi.sh checks).
+rustup target list --installed | grep -qx aarch64-unknown-linux-gnu || rustup target add aarch64-unknown-linux-gnu
+[ "$(cargo deb --version 2>/dev/null)" = "cargo-deb 3.8.0" ] || cargo install --locked cargo-deb --version 3.8.0
 
 step "format"
 cargo fmt --all -- --check
@@ -62,3 +70,6 @@ step "firmware: the thesis's ATmega16 board, built and tested in simavr; the Ras
 (cd firmware/atmega16-hil && cargo fmt -- --check && cargo clippy --all-targets -- -D warnings)
 (cd firmware/rp2040-emu/expect && cargo fmt -- --check && cargo clippy --all-targets -- -D warnings)
 bash firmware/test.sh
+
+step "Raspberry Pi: orch cross-built for aarch64 and run under qemu (play, analyze, serve and SIGTERM), its .deb installed into a scratch root, its systemd unit verified (scripts/pi.sh)"
+bash scripts/pi.sh
