@@ -4,7 +4,7 @@
 
 const $ = (id) => document.getElementById(id);
 const OUTCOMES = ["on_time", "late", "early", "unison", "joined", "dropped", "skipped", "unmatched"];
-const DROPS = ["channel", "range", "power", "too_fast", "too_soft", "cancelled", "stopped"];
+const DROPS = ["channel", "percussion", "unmapped", "range", "power", "too_fast", "too_soft", "cancelled", "stopped"];
 const BLACK = new Set([1, 3, 6, 8, 10]);
 
 let song = null;      // the song shown (the API's song object)
@@ -58,7 +58,8 @@ async function showSong(s) {
   const ul = $("outcomes");
   ul.textContent = "";
   const o = a.outcomes;
-  const dropped = DROPS.reduce((n, d) => n + (o.dropped[d] || 0), 0);
+  // Every reason the report gives, known here or not.
+  const dropped = Object.values(o.dropped).reduce((n, k) => n + (k || 0), 0);
   const count = { ...o, dropped, unmatched: a.unmatched };
   const item = (name, label, n) => {
     const li = document.createElement("li");

@@ -37,7 +37,12 @@ pub fn smf(events: &[(u32, &[u8])]) -> Vec<u8> {
 /// straight performance can: on time, late, unison, joined, dropped (channel, too fast), a
 /// folded note.
 pub fn outcomes_song() -> (Song, Robot) {
-    let robot_toml = orch_robot::DEFAULT_TOML.replace("channels = \"all\"", "channels = [1, 2]");
+    let robot_toml =
+        orch_robot::DEFAULT_TOML.replace("channels = \"melodic\"", "channels = [1, 2]");
+    assert!(
+        robot_toml.contains("channels = [1, 2]"),
+        "the default's channels line moved"
+    );
     let robot = Robot::from_toml(&robot_toml).expect("a valid robot");
     let q = 480;
     let on = |ch: u8, n: u8| [0x90 | ch, n, 100];
