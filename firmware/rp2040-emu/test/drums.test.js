@@ -4,8 +4,8 @@
 // piano playing beside it, where every duty write equals orch-core's flush_duties on the host
 // (as the keys are proven in pca9685.test.js); every strike's channel goes off by itself at
 // its pulse's end (8 ms at velocity 1 to 20 ms at 127), whatever the Note-Off does and with
-// none at all; a roll faster than the rebound; and nothing left on after the watchdog's reset
-// or a panic in the middle of a pulse.
+// none at all; a roll faster than the rebound; nothing left on after the watchdog's reset or a
+// panic in the middle of a pulse; and the kit's board not answering while the piano plays on.
 const test = require('node:test');
 const assert = require('node:assert/strict');
 const { Pico } = require('../lib/pico.js');
@@ -250,4 +250,32 @@ test('a panic in the middle of a pulse: OE high at once, every channel of the fi
   p.runUs(700_000);
   assert.equal(p.resets.length, 1);
   assert.ok(p.bus.programmed().every((b) => b.every((d) => d === 0)), 'nothing struck again after the reset');
+});
+
+test('the kit\'s board not answering: the piano plays on (OE low), and the board comes back all off, no stale strike', () => {
+  const { p } = booted();
+  p.bus.boards[KIT].nack = true;
+  p.sendDin([HIT, 36, 127]); // its write fails: retried, then the board is set aside
+  p.runUs(5_000);
+  const nacked = p.bus.nacked;
+  assert.ok(nacked >= 3, `the firmware retried (${nacked} NACKed address phases)`);
+  p.sendDin([0x90, 60, 100]); // the piano still plays
+  p.runUs(5_000);
+  assert.equal(p.bus.outputs()[1][8], strikeDuty(100));
+  assert.ok(p.bus.oe.at(-1).enabled, 'OE low: the keyboard\'s boards are in service');
+  // The kit's board comes back from a power cycle after the kick's 20 ms pulse has ended (the
+  // retry rounds, every 10 ms, still failing meanwhile).
+  p.runUs(50_000);
+  const fromLog = p.bus.log.length;
+  p.bus.boards[KIT].powerCycle();
+  p.bus.boards[KIT].nack = false;
+  p.runUs(30_000);
+  const seq = p.bus.log.slice(fromLog).filter((t) => t.board === KIT && !t.read).map((t) => t.bytes);
+  assert.deepEqual(seq[0], [0xfd, 0x10], 'initialised again, every channel off first');
+  assert.equal(seq.length, 5, 'the init alone: the kick\'s pulse is over, nothing to strike');
+  assert.ok(p.bus.outputs()[KIT].every((d) => d === 0));
+  p.sendDin([HIT, 38, 127]);
+  p.runUs(2_000);
+  assert.equal(p.bus.outputs()[KIT][1], 4095, 'and it plays again');
+  assert.equal(p.resets.length, 0);
 });
