@@ -4,8 +4,8 @@
 //!   (GP1, 31250 baud 8N1); every DIN byte goes out again at once on UART0 TX (GP0): MIDI
 //!   thru, as the thesis's board passed its stream on to the flute robot.
 //! - orch-core's interpreter and safety guard with the thesis's keyboard and boards
-//!   (`Interpreter::thesis`, in a static built at compile time), time from embassy-time
-//!   (µs). DIN bytes go through its decoder; a USB-MIDI event carries a whole message, decoded
+//!   (`Interpreter::thesis`, in a static built at compile time; the `pca9685` build's piano
+//!   and drum kit, `robot.rs`, in a static built at start-up), time from embassy-time (µs). DIN bytes go through its decoder; a USB-MIDI event carries a whole message, decoded
 //!   apart so that it never splits a DIN message's running status.
 //! - The four PCA9555 finger boards at 0x21..=0x24 on I2C0 (GP4 SDA, GP5 SCL) at 400 kHz,
 //!   with orch-boards' async driver: each board initialised outputs-0 FIRST, THEN outputs;
