@@ -173,16 +173,24 @@ impl Strikes {
     }
 
     /// The first key after the keyboard's `keyboard_keys` keys and the groups so far.
-    fn next_key(&self, keyboard_keys: usize) -> usize {
-        let first = if self.keyboard { keyboard_keys } else { 0 };
-        first + self.outputs()
+    const fn next_key(&self, keyboard_keys: usize) -> usize {
+        let mut next = if self.keyboard { keyboard_keys } else { 0 };
+        let mut g = 0;
+        while g < self.count as usize && g < MAX_STRIKE_GROUPS {
+            next += self.groups[g].outputs as usize;
+            g += 1;
+        }
+        next
     }
 
     /// Adds an unpitched group (a drum kit) after the last one, on `channels`: output `i`
     /// plays the notes `outputs[i].0` with the pulse `outputs[i].1`. A note named twice plays
     /// its first output. `keyboard_keys` is the keyboard's range's keys (ignored without a
     /// keyboard).
-    pub fn push_kit(
+    ///
+    /// A `const fn`: a fixed robot's kit (an MCU's) can be built in a `const` item, checked
+    /// when it is compiled (see [`Strikes::with_kit`]).
+    pub const fn push_kit(
         &mut self,
         channels: ChannelMask,
         keyboard_keys: usize,
@@ -197,17 +205,24 @@ impl Strikes {
             return Err(StrikeError::Span { group: g as u8 });
         }
         self.map[g] = [0; 128];
-        for (i, (notes, pulse)) in outputs.iter().enumerate() {
+        // `while` loops: a `const fn` has no iterators.
+        let mut i = 0;
+        while i < outputs.len() {
+            let (notes, pulse) = outputs[i];
             let key = first + i;
-            self.pulses[key] = *pulse;
-            for &n in notes.iter() {
-                let slot = self.map[g]
-                    .get_mut(n as usize)
-                    .ok_or(StrikeError::Map { group: g as u8 })?;
-                if *slot == 0 {
-                    *slot = key as u8 + 1;
+            self.pulses[key] = pulse;
+            let mut j = 0;
+            while j < notes.len() {
+                let n = notes[j] as usize;
+                if n >= self.map[g].len() {
+                    return Err(StrikeError::Map { group: g as u8 });
                 }
+                if self.map[g][n] == 0 {
+                    self.map[g][n] = key as u8 + 1;
+                }
+                j += 1;
             }
+            i += 1;
         }
         self.groups[g] = StrikeGroup {
             channels,
@@ -217,6 +232,20 @@ impl Strikes {
         };
         self.count += 1;
         Ok(())
+    }
+
+    /// [`push_kit`](Self::push_kit) on a copy, for a `const` item: the strikes with the kit
+    /// added. Panics if `push_kit` would refuse it (in a `const` item: the build fails).
+    pub const fn with_kit(
+        mut self,
+        channels: ChannelMask,
+        keyboard_keys: usize,
+        outputs: &[(&[u8], Pulse)],
+    ) -> Self {
+        match self.push_kit(channels, keyboard_keys, outputs) {
+            Ok(()) => self,
+            Err(_) => panic!("Strikes::with_kit: push_kit refused the kit"),
+        }
     }
 
     /// Adds a pitched group (a glockenspiel) after the last one, on `channels`: one output a
@@ -485,6 +514,58 @@ mod tests {
         assert_eq!(s.find(ch(3), n(38)), None);
         let folded = s.find(ch(0), n(60)).unwrap().unwrap();
         assert_eq!((folded.key, folded.octaves), (2, 1));
+    }
+
+    /// A kit built in a `const` item, as an MCU's fixed robot builds it.
+    const CONST_KIT: Strikes = Strikes::NONE
+        .with_kit(
+            ChannelMask(1 << 9),
+            61,
+            &[(&[35, 36], Pulse::DRUM), (&[38, 40], Pulse::DRUM)],
+        )
+        .with_kit(ChannelMask(1 << 8), 61, &[(&[60], Pulse::DRUM)]);
+
+    #[test]
+    fn a_kit_built_at_compile_time_is_the_one_push_kit_builds() {
+        let mut s = Strikes::NONE;
+        s.push_kit(
+            ChannelMask(1 << 9),
+            61,
+            &[(&[35, 36], Pulse::DRUM), (&[38, 40], Pulse::DRUM)],
+        )
+        .unwrap();
+        s.push_kit(ChannelMask(1 << 8), 61, &[(&[60], Pulse::DRUM)])
+            .unwrap();
+        assert_eq!(CONST_KIT, s);
+        assert_eq!((s.groups[1].first, s.count), (63, 2));
+        assert_eq!(CONST_KIT.map[0][40], 63);
+        CONST_KIT
+            .validate(61, 64, Duration::from_millis(100))
+            .unwrap();
+        // Its refusals, evaluated at compile time.
+        const TOO_HIGH: Result<(), StrikeError> = {
+            let mut s = Strikes::NONE;
+            s.push_kit(ChannelMask(1), 0, &[(&[128], Pulse::DRUM)])
+        };
+        assert_eq!(TOO_HIGH, Err(StrikeError::Map { group: 0 }));
+        const EMPTY: Result<(), StrikeError> = {
+            let mut s = Strikes::NONE;
+            s.push_kit(ChannelMask(1), 0, &[])
+        };
+        assert_eq!(EMPTY, Err(StrikeError::Span { group: 0 }));
+        const FIFTH: Result<(), StrikeError> = {
+            let mut s = CONST_KIT
+                .with_kit(ChannelMask(1), 61, &[(&[1], Pulse::DRUM)])
+                .with_kit(ChannelMask(1), 61, &[(&[2], Pulse::DRUM)]);
+            s.push_kit(ChannelMask(1), 61, &[(&[3], Pulse::DRUM)])
+        };
+        assert_eq!(FIFTH, Err(StrikeError::TooManyGroups));
+    }
+
+    #[test]
+    #[should_panic(expected = "push_kit refused")]
+    fn with_kit_panics_on_a_kit_push_kit_refuses() {
+        let _ = Strikes::NONE.with_kit(ChannelMask(1), 0, &[(&[200], Pulse::DRUM)]);
     }
 
     #[test]

@@ -34,7 +34,7 @@ function hostRun(pico, untilNs = pico.nowNs, fromNs = 0) {
 
 /**
  * The same for the `pca9685` build (`orch-rp2040-expect pca9685`: the firmware's robot.rs
- * settings, flush_duties): { writes: [{ tUs, board, duties[16] }], duties: 4 × 16 at the end }.
+ * settings, flush_duties): { writes: [{ tUs, board, duties[16] }], duties: 5 × 16 at the end }.
  */
 function hostRunPwm(pico, untilNs = pico.nowNs, fromNs = 0) {
   const text = hostInput(pico, untilNs, fromNs);
@@ -162,9 +162,10 @@ function firmwareDutyWrites(pico, from = 0) {
  * hands a board its duties unchanged puts nothing on the bus. Returns { writes, dropped }.
  */
 function changingDutyWrites(writes) {
-  const last = [0, 1, 2, 3].map(() => new Array(16).fill(0));
+  const last = [];
   const out = [];
   for (const w of writes) {
+    last[w.board] ??= new Array(16).fill(0);
     if (w.duties.every((d, c) => d === last[w.board][c])) continue;
     last[w.board] = w.duties;
     out.push(w);
@@ -174,9 +175,10 @@ function changingDutyWrites(writes) {
 
 /** Each channel's duty changes in a series of duty writes: [{ tUs, board, channel, duty }]. */
 function dutyEvents(writes) {
-  const last = [0, 1, 2, 3].map(() => new Array(16).fill(0));
+  const last = [];
   const out = [];
   for (const w of writes) {
+    last[w.board] ??= new Array(16).fill(0);
     w.duties.forEach((d, c) => {
       if (d !== last[w.board][c]) out.push({ tUs: w.tUs, board: w.board, channel: c, duty: d });
     });
@@ -194,7 +196,8 @@ function sameDutyEvents(firmware, host, maxLateUs) {
   const f = dutyEvents(firmware);
   const h = dutyEvents(host);
   const m = { changes: 0, releases: 0, late: [] };
-  for (let board = 0; board < 4; board++) {
+  const boards = Math.max(0, ...f.map((e) => e.board + 1), ...h.map((e) => e.board + 1));
+  for (let board = 0; board < boards; board++) {
     for (let channel = 0; channel < 16; channel++) {
       const fc = f.filter((e) => e.board === board && e.channel === channel);
       const hc = h.filter((e) => e.board === board && e.channel === channel);

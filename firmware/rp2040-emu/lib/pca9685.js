@@ -1,8 +1,8 @@
 'use strict';
-// Four PCA9685 16-channel 12-bit PWM controllers on the emulated RP2040's I2C0 (the `pca9685`
-// build's finger boards at 0x40..=0x43), on the PCA9555 bus's machinery (bus time from the
-// programmed SCL period, a board that NACKs or holds SCL low, SDA held low), and their
-// active-low OE pin wired to the Pico's GP6.
+// PCA9685 16-channel 12-bit PWM controllers on the emulated RP2040's I2C0 (the `pca9685`
+// build's five boards at 0x40..=0x44: the keyboard's four and the drum kit's), on the PCA9555
+// bus's machinery (bus time from the programmed SCL period, a board that NACKs or holds SCL
+// low, SDA held low), and their active-low OE pin wired to the Pico's GP6.
 //
 // Registers as the data sheet (NXP PCA9685 Rev. 4; orch-sim's `pca9685.rs` models the same):
 // MODE1 (0x00: RESTART, EXTCLK, AI, SLEEP, SUB1..3, ALLCALL; power-up 0x11, asleep), MODE2
@@ -186,7 +186,7 @@ class Pca9685 {
   }
 }
 
-/** Four PCA9685 on the bus, and the OE pin they share. */
+/** The PCA9685s on the bus (as many as addresses), and the OE pin they share. */
 class Pca9685Bus extends Pca9555Bus {
   constructor(addresses) {
     super(addresses, Pca9685);
@@ -204,12 +204,12 @@ class Pca9685Bus extends Pca9555Bus {
     }
   }
 
-  /** What every board outputs now: 4 × 16 duties. */
+  /** What every board outputs now: a board's 16 duties each. */
   outputs() {
     return this.boards.map((b) => b.outputs());
   }
 
-  /** What every board's registers program: 4 × 16 duties. */
+  /** What every board's registers program: a board's 16 duties each. */
   programmed() {
     return this.boards.map((b) => b.programmed());
   }

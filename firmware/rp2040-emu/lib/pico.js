@@ -1,8 +1,8 @@
 'use strict';
 // A Raspberry Pi Pico in rp2040js running firmware/rp2040's ELF: the project's stand-in boot
-// ROM, four PCA9555 boards on I2C0 (or, for the `pca9685` build, four PCA9685 with their OE
-// pin on GP6), a DIN MIDI line into UART0 at wire pacing (thru out of
-// its TX collected), a USB host on the USB controller, and the watchdog's reset.
+// ROM, four PCA9555 boards on I2C0 (or, for the `pca9685` build, five PCA9685 with their OE
+// pin on GP6: the piano's four and the drum kit's), a DIN MIDI line into UART0 at wire pacing
+// (thru out of its TX collected), a USB host on the USB controller, and the watchdog's reset.
 //
 // The emulated clock runs in ns; the core's cycles advance it at clk_sys. When the core
 // sleeps (WFI/WFE) the clock jumps to the next event. A watchdog reset builds the chip anew
@@ -21,8 +21,11 @@ const { usbOutBuffers } = require('./usb-out.js');
 const { dwI2c } = require('./dw-i2c.js');
 
 const ADDRESSES = [0x21, 0x22, 0x23, 0x24];
-/** The `pca9685` build's boards, and the GPIO wired to their OE pins (active low). */
-const PCA9685_ADDRESSES = [0x40, 0x41, 0x42, 0x43];
+/**
+ * The `pca9685` build's boards (the keyboard on 0x40..=0x43, the drum kit on 0x44), and the
+ * GPIO wired to their OE pins (active low).
+ */
+const PCA9685_ADDRESSES = [0x40, 0x41, 0x42, 0x43, 0x44];
 const OE_PIN = 6;
 /** One MIDI byte on the wire: 10 bits at 31250 baud. */
 const BYTE_US = 320;
@@ -259,7 +262,7 @@ class Pico {
     this.usbHost.send(packet);
   }
 
-  /** Boots until the firmware has initialised the four boards and the host configured USB. */
+  /** Boots until the firmware has initialised every board and the host configured USB. */
   bootUp(maxUs = 200_000) {
     const end = this.clock.nanos + maxUs * 1000;
     while (this.clock.nanos < end) {

@@ -38,6 +38,30 @@ function assertSameAsHost(p, from, din = []) {
   return m;
 }
 
+/**
+ * The `pca9685` build: every duty write the firmware made equals the host's flush_duties
+ * (those that change a board: the driver writes nothing for the others), board by board in
+ * order; every strike, hold and release (and every drum pulse's start and end) reached its
+ * channel no earlier than the host's and at most MAX_LATE_US later; the boards end as the
+ * host's duties; DIN thru equals the input. Returns the match and the host's writes.
+ */
+function assertPwmSameAsHost(p, from, din = []) {
+  assert.deepEqual(p.thru, din, 'MIDI thru must equal the DIN input');
+  const fw = host.firmwareDutyWrites(p, from);
+  const h = host.hostRunPwm(p);
+  const { writes, dropped } = host.changingDutyWrites(h.writes);
+  const boards = p.bus.boards.map((_, i) => i);
+  const perBoard = (ws) => boards.map((b) => ws.filter((w) => w.board === b).map((w) => w.duties));
+  assert.deepEqual(perBoard(fw), perBoard(writes), 'the same duty writes as the host, board by board');
+  const m = host.sameDutyEvents(fw, writes, MAX_LATE_US);
+  assert.deepEqual(p.bus.programmed(), h.duties, 'final duties');
+  assert.equal(p.resets.length, 0, 'no watchdog reset');
+  console.log(
+    `  ${writes.length} host duty writes (${dropped} that changed nothing left out); ${m.changes} strikes and holds and ${m.releases} releases on the boards after the host's by: median ${fmt(host.percentile(m.late, 50))} µs, 99 % ${fmt(host.percentile(m.late, 99))} µs, at most ${fmt(host.percentile(m.late, 100))} µs`,
+  );
+  return { ...m, fw, host: writes };
+}
+
 /** DIN bytes back to back at wire speed, then `tailUs` (past the guard's strike and rest). */
 function checkDin(stream, tailUs = 100_000) {
   const { p, from } = booted();
@@ -92,4 +116,4 @@ function floodStream(seconds) {
   return s;
 }
 
-module.exports = { booted, assertSameAsHost, checkDin, checkUsb, floodStream, MAX_LATE_US, fmt, midiEvent, BYTE_US };
+module.exports = { booted, assertSameAsHost, assertPwmSameAsHost, checkDin, checkUsb, floodStream, MAX_LATE_US, fmt, midiEvent, BYTE_US };

@@ -4,16 +4,18 @@
 //!   (GP1, 31250 baud 8N1); every DIN byte goes out again at once on UART0 TX (GP0): MIDI
 //!   thru, as the thesis's board passed its stream on to the flute robot.
 //! - orch-core's interpreter and safety guard with the thesis's keyboard and boards
-//!   (`Interpreter::thesis`, in a static built at compile time), time from embassy-time
-//!   (µs). DIN bytes go through its decoder; a USB-MIDI event carries a whole message, decoded
+//!   (`Interpreter::thesis`, in a static built at compile time; the `pca9685` build's piano
+//!   and drum kit, `robot.rs`, in a static built at start-up), time from embassy-time (µs). DIN bytes go through its decoder; a USB-MIDI event carries a whole message, decoded
 //!   apart so that it never splits a DIN message's running status.
 //! - The four PCA9555 finger boards at 0x21..=0x24 on I2C0 (GP4 SDA, GP5 SCL) at 400 kHz,
 //!   with orch-boards' async driver: each board initialised outputs-0 FIRST, THEN outputs;
 //!   one write per changed board; 3 attempts, then the board is set aside and initialised
 //!   again every 10 ms with its frame. Every bus operation has a time limit and a hung bus is
 //!   recovered ([`bus`]): a hung board no longer hangs the loop. With the `pca9685` feature,
-//!   four PCA9685 PWM boards at 0x40..=0x43 instead, played with strike and hold, and their
-//!   output-enable pin on GP6 as the hardware stop (`pca9685.rs`); the loop is the same.
+//!   five PCA9685 PWM boards at 0x40..=0x44 instead, a piano and a drum kit on channel 10
+//!   (`robot.rs`), keys played with strike and hold, drums with pulses that end by
+//!   themselves, and the boards' output-enable pin on GP6 as the hardware stop
+//!   (`pca9685.rs`); the loop is the same.
 //! - The watchdog (0.5 s), fed by the interpreter loop: a hung loop resets the Pico, and
 //!   power-up releases every key. A panic releases them at once, then waits for the reset.
 //! - The status LED (GP25): a flash for MIDI coming in, blinking for a fault ([`led`]).
@@ -57,10 +59,10 @@ use embassy_time::{Duration, Instant as Clock, Timer};
 use embassy_usb::class::midi::MidiClass;
 use embassy_usb::UsbDevice;
 use embedded_io_async::{Read, Write};
-use orch_core::{Decoder, Instant, Interpreter};
+use orch_core::{Decoder, Instant};
 use static_cell::StaticCell;
 
-use crate::boards::Boards;
+use crate::boards::{Boards, Robot};
 use crate::bus::Fault;
 use crate::led::Led;
 
@@ -78,8 +80,8 @@ const ATTEMPTS: u8 = 3;
 const RETRY: Duration = Duration::from_millis(10);
 /// The watchdog's timeout.
 const WATCHDOG: Duration = Duration::from_millis(500);
-/// Every board.
-pub(crate) const ALL: u8 = 0b1111;
+/// Every board: bit `i` for board `i`.
+pub(crate) const ALL: u8 = ((1u16 << boards::BOARDS) - 1) as u8;
 
 /// The pin-out, in one place (the README's table): every GPIO the firmware uses.
 struct Pins {
@@ -205,7 +207,7 @@ async fn interpret(boards: &mut Boards, watchdog: &mut Watchdog, mut led: Led<'_
     let robot = boards::robot();
     let mut usb_decoder: Decoder = Decoder::new();
     let mut failed: u8 = 0;
-    for i in 0..4 {
+    for i in 0..boards::BOARDS {
         match boards.init(i).await {
             Ok(()) => {}
             Err(Fault::Failed) => failed |= 1 << i,
@@ -269,7 +271,7 @@ async fn interpret(boards: &mut Boards, watchdog: &mut Watchdog, mut led: Led<'_
 
 /// Runs the guard's timers due by `at`, each at its own deadline (a strike's end among them),
 /// and writes what each changed, as orch-core on the host flushes after each.
-async fn advance(robot: &mut Interpreter, boards: &mut Boards, failed: &mut u8, at: u64) {
+async fn advance(robot: &mut Robot, boards: &mut Boards, failed: &mut u8, at: u64) {
     while let Some(d) = robot.next_deadline().filter(|d| d.as_micros() <= at) {
         robot.tick(d);
         write(robot, boards, failed).await;
@@ -279,7 +281,7 @@ async fn advance(robot: &mut Interpreter, boards: &mut Boards, failed: &mut u8, 
 /// Writes every changed board, [`ATTEMPTS`] times at most; a board that fails is set aside
 /// in `failed` (the retry round initialises it again and sends its frame). A write that runs
 /// out of time has hung the bus: every board is set aside until the bus is recovered.
-async fn write(robot: &mut Interpreter, boards: &mut Boards, failed: &mut u8) {
+async fn write(robot: &mut Robot, boards: &mut Boards, failed: &mut u8) {
     for (i, frame) in boards::changed(robot).into_iter().enumerate() {
         let Some(frame) = frame else { continue };
         if *failed & (1 << i) != 0 {
@@ -305,8 +307,8 @@ async fn write(robot: &mut Interpreter, boards: &mut Boards, failed: &mut u8) {
 
 /// The retry round: every board set aside is initialised again (every output off first) and
 /// sent its frame; one that still fails stays aside, and a timeout sets them all aside again.
-async fn retry(robot: &Interpreter, boards: &mut Boards, failed: &mut u8) {
-    for i in 0..4 {
+async fn retry(robot: &Robot, boards: &mut Boards, failed: &mut u8) {
+    for i in 0..boards::BOARDS {
         if *failed & (1 << i) == 0 {
             continue;
         }

@@ -16,18 +16,24 @@ use crate::BusDevice;
 /// The boards' 7-bit addresses (the thesis's 0x42..0x48 in write form).
 pub const ADDRESSES: [u8; 4] = [0x21, 0x22, 0x23, 0x24];
 
+/// How many boards.
+pub const BOARDS: usize = 4;
+
+/// The interpreter: the thesis's (four boards, 61 keys).
+pub type Robot = Interpreter;
+
 /// What one board is sent: its 16 outputs.
 pub type Frame = u16;
 
 /// The interpreter: `Interpreter::thesis()` (61 keys, four boards, fold, guard on), in a
 /// static (≈ 1.2 KB) built at compile time: never on the stack.
-pub fn robot() -> &'static mut Interpreter {
+pub fn robot() -> &'static mut Robot {
     static ROBOT: ConstStaticCell<Interpreter> = ConstStaticCell::new(Interpreter::thesis());
     ROBOT.take()
 }
 
 /// The four boards.
-pub struct Boards([Pca9555Async<BusDevice>; 4]);
+pub struct Boards([Pca9555Async<BusDevice>; BOARDS]);
 
 impl Boards {
     /// The boards, each on `device()`. Does no bus traffic.
@@ -51,14 +57,14 @@ impl Boards {
 
 /// The frame's changed boards, as orch-core's flush hands them over (it takes them as
 /// written; the async writes follow).
-pub fn changed(robot: &mut Interpreter) -> [Option<Frame>; 4] {
+pub fn changed(robot: &mut Robot) -> [Option<Frame>; BOARDS] {
     let mut changed = Changed::default();
     let _ = robot.flush(&mut changed);
     changed.0
 }
 
 /// Board `i`'s frame now, for a board initialised again.
-pub fn frame(robot: &Interpreter, i: usize) -> Frame {
+pub fn frame(robot: &Robot, i: usize) -> Frame {
     robot.frame().outputs(i)
 }
 
@@ -73,12 +79,14 @@ pub fn release_all_now() {
 }
 
 #[derive(Default)]
-struct Changed([Option<u16>; 4]);
+struct Changed([Option<u16>; BOARDS]);
 
 impl FingerBoards for Changed {
     type Error = Infallible;
     fn write_board(&mut self, board: BoardId, outputs: u16) -> Result<(), Infallible> {
-        self.0[board.index as usize & 3] = Some(outputs);
+        if let Some(slot) = self.0.get_mut(board.index as usize) {
+            *slot = Some(outputs);
+        }
         Ok(())
     }
 }

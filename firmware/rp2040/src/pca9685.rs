@@ -1,5 +1,6 @@
-//! The `pca9685` build's finger boards: four PCA9685 PWM boards at 0x40..=0x43 on the same
-//! I2C pins, and their active-low output-enable pin (OE) on GP6.
+//! The `pca9685` build's finger boards: five PCA9685 PWM boards at 0x40..=0x44 on the same
+//! I2C pins (the keyboard on the first four, the drum kit on the fifth: [`crate::robot`]), and
+//! their active-low output-enable pin (OE) on GP6.
 //!
 //! - Each board is initialised by orch-boards' `Pca9685Async::init_prescale`: every channel
 //!   fully off (`[ALL_LED_OFF_H, 0x10]`) FIRST, then asleep, the prescale (1526 Hz), `MODE2`
@@ -10,7 +11,8 @@
 //!   ([`crate::robot::PCA9685`]); `flush_duties` hands over each changed board's 16 duties and
 //!   the driver writes the run of channels that changed in one auto-increment write (one key:
 //!   5 bytes, 56 bit-times, 140 µs). The loop wakes at `next_deadline`, which includes the end
-//!   of every strike, and writes the hold then.
+//!   of every strike, and writes the hold then; and the end of every drum hit's pulse, and
+//!   writes the beater's channel off then (whatever the Note-Off does).
 //! - **OE, the hardware stop** (GP6, to every board's OE, with a pull-up to 3.3 V on the board
 //!   side): driven high (every output off, whatever the registers say: `MODE2`'s OUTNE = 00)
 //!   from reset until the power-up round has initialised the boards all off, then low. It goes
@@ -27,15 +29,16 @@ use embassy_time::Delay;
 use orch_boards::asynch::Pca9685Async;
 use orch_boards::pca9685::registers::{ALL_LED_OFF_H, FULL_ON_OFF};
 use orch_boards::pca9685::Prescale;
-use orch_core::{BoardId, Duty, FingerBoards, Interpreter};
+use orch_core::{BoardId, Duty, FingerBoards};
 use static_cell::StaticCell;
 
 use crate::bus::{self, Fault};
+pub use crate::robot::{Robot, BOARDS};
 use crate::robot::{PCA9685, PCA9685_ADDRESSES};
 use crate::{BusDevice, ALL};
 
 /// The boards' 7-bit addresses.
-pub const ADDRESSES: [u8; 4] = PCA9685_ADDRESSES;
+pub const ADDRESSES: [u8; BOARDS] = PCA9685_ADDRESSES;
 /// The OE pin: GP6 (the Pico's pin 9, beside SDA GP4 on pin 6 and SCL GP5 on pin 7).
 pub const OE_PIN: usize = 6;
 /// The PWM frequency: the chip's highest, orch-boards' default (1526 Hz, `PRE_SCALE` 3).
@@ -46,14 +49,14 @@ pub type Frame = [u16; 16];
 
 /// The interpreter on [`PCA9685`]: checked at start-up (a setting it refuses is a panic, and
 /// the panic handler keeps every output off), in a static.
-pub fn robot() -> &'static mut Interpreter {
-    static ROBOT: StaticCell<Interpreter> = StaticCell::new();
-    ROBOT.init_with(|| Interpreter::new(PCA9685).expect("the PCA9685 robot's settings"))
+pub fn robot() -> &'static mut Robot {
+    static ROBOT: StaticCell<Robot> = StaticCell::new();
+    ROBOT.init_with(|| Robot::new(PCA9685).expect("the PCA9685 robot's settings"))
 }
 
-/// The four boards and their OE pin.
+/// The five boards and their OE pin.
 pub struct Boards {
-    boards: [Pca9685Async<BusDevice>; 4],
+    boards: [Pca9685Async<BusDevice>; BOARDS],
     /// High: every output off.
     oe: Output<'static>,
 }
@@ -93,14 +96,14 @@ impl Boards {
 
 /// The boards whose duties changed, as orch-core's `flush_duties` hands them over (it takes
 /// them as written; the async writes follow).
-pub fn changed(robot: &mut Interpreter) -> [Option<Frame>; 4] {
+pub fn changed(robot: &mut Robot) -> [Option<Frame>; BOARDS] {
     let mut changed = Changed::default();
     let _ = robot.flush_duties(&mut changed);
     changed.0
 }
 
 /// Board `i`'s duties now, for a board initialised again.
-pub fn frame(robot: &Interpreter, i: usize) -> Frame {
+pub fn frame(robot: &Robot, i: usize) -> Frame {
     robot.duties()[i].map(Duty::get)
 }
 
@@ -119,7 +122,7 @@ pub fn release_all_now() {
 }
 
 #[derive(Default)]
-struct Changed([Option<Frame>; 4]);
+struct Changed([Option<Frame>; BOARDS]);
 
 impl FingerBoards for Changed {
     type Error = Infallible;
@@ -132,11 +135,15 @@ impl FingerBoards for Changed {
                 0
             }
         });
-        self.0[board.index as usize & 3] = Some(frame);
+        if let Some(slot) = self.0.get_mut(board.index as usize) {
+            *slot = Some(frame);
+        }
         Ok(())
     }
     fn write_duties(&mut self, board: BoardId, duties: &[Duty; 16]) -> Result<(), Infallible> {
-        self.0[board.index as usize & 3] = Some(duties.map(Duty::get));
+        if let Some(slot) = self.0.get_mut(board.index as usize) {
+            *slot = Some(duties.map(Duty::get));
+        }
         Ok(())
     }
 }

@@ -8,9 +8,10 @@
 //!   `outputs O0 O1 O2 O3` (the final frame). Numbers are decimal, or hex with `0x`.
 //! - `orch-rp2040-expect pca9685` does the same for the firmware's `pca9685` build: the
 //!   settings in `firmware/rp2040/src/robot.rs` (included here, so both run the same ones:
-//!   four PCA9685 boards, strike and hold), flushed with `flush_duties`; it prints every
-//!   `write_duties` as `duties T BOARD D0 .. D15` (µs, 0..4, each channel's duty 0..=4095),
-//!   then `final BOARD D0 .. D15` for each board.
+//!   five PCA9685 boards, a piano played with strike and hold and a drum kit on channel 10
+//!   played with pulses), flushed with `flush_duties`; it prints every `write_duties` as
+//!   `duties T BOARD D0 .. D15` (µs, 0..5, each channel's duty 0..=4095), then
+//!   `final BOARD D0 .. D15` for each board and `outputs O0 .. O4`.
 //! - `orch-rp2040-expect smf FILE` prints a Standard MIDI File's channel messages as timed
 //!   wire bytes, `T B` a line (µs from the start), in time order, with the tempo map.
 //!
@@ -20,7 +21,7 @@
 
 use std::io::{BufRead, Write};
 
-use orch_core::{BoardId, Decoder, Duty, FingerBoards, Instant, Interpreter};
+use orch_core::{BoardId, Decoder, Duty, FingerBoards, HeldNotes, Instant, Interpreter};
 
 /// The firmware's settings for its `pca9685` build.
 #[path = "../../../rp2040/src/robot.rs"]
@@ -50,16 +51,16 @@ impl<W: Write> FingerBoards for Recorder<'_, W> {
     }
 }
 
-/// The firmware's interpreter loop, on the host.
-struct Loop<'a, W: Write> {
-    robot: Interpreter,
+/// The firmware's interpreter loop, on the host: `B` boards, `K` outputs.
+struct Loop<'a, W: Write, const B: usize, const K: usize, H: HeldNotes> {
+    robot: Interpreter<B, K, H>,
     usb: Decoder,
     boards: Recorder<'a, W>,
     /// PWM boards: flush with `flush_duties`.
     pwm: bool,
 }
 
-impl<W: Write> Loop<'_, W> {
+impl<W: Write, const B: usize, const K: usize, H: HeldNotes> Loop<'_, W, B, K, H> {
     fn advance(&mut self, at: u64) -> std::io::Result<()> {
         while let Some(d) = self.robot.next_deadline().filter(|d| d.as_micros() <= at) {
             self.robot.tick(d);
@@ -179,36 +180,47 @@ fn run() -> Result<(), String> {
             )
         }
     };
-    let robot = if pwm {
-        Interpreter::new(robot::PCA9685).map_err(|e| e.to_string())?
+    let input = std::io::stdin().lock();
+    if pwm {
+        let robot = robot::Robot::new(robot::PCA9685).map_err(|e| e.to_string())?;
+        run_loop(robot, true, input, &mut out)?;
     } else {
-        Interpreter::thesis()
-    };
+        run_loop(Interpreter::thesis(), false, input, &mut out)?;
+    }
+    out.flush().map_err(|e| e.to_string())
+}
+
+/// Runs `robot` on the inputs, then prints the final duties (PWM boards) and outputs.
+fn run_loop<W: Write, const B: usize, const K: usize, H: HeldNotes>(
+    robot: Interpreter<B, K, H>,
+    pwm: bool,
+    input: impl BufRead,
+    out: &mut W,
+) -> Result<(), String> {
     let mut l = Loop {
         pwm,
         robot,
         usb: Decoder::new(),
-        boards: Recorder {
-            now_us: 0,
-            out: &mut out,
-        },
+        boards: Recorder { now_us: 0, out },
     };
-    for line in std::io::stdin().lock().lines() {
+    for line in input.lines() {
         l.line(&line.map_err(|e| e.to_string())?)?;
     }
-    let duties = l.robot.duties();
-    let o: [u16; 4] = std::array::from_fn(|i| l.robot.frame().outputs(i));
+    let io = |e: std::io::Error| e.to_string();
     if pwm {
-        for (b, duties) in duties.iter().enumerate() {
-            write!(out, "final {b}").map_err(|e| e.to_string())?;
+        for (b, duties) in l.robot.duties().iter().enumerate() {
+            write!(l.boards.out, "final {b}").map_err(io)?;
             for d in duties {
-                write!(out, " {}", d.get()).map_err(|e| e.to_string())?;
+                write!(l.boards.out, " {}", d.get()).map_err(io)?;
             }
-            writeln!(out).map_err(|e| e.to_string())?;
+            writeln!(l.boards.out).map_err(io)?;
         }
     }
-    writeln!(out, "outputs {} {} {} {}", o[0], o[1], o[2], o[3]).map_err(|e| e.to_string())?;
-    out.flush().map_err(|e| e.to_string())
+    write!(l.boards.out, "outputs").map_err(io)?;
+    for i in 0..B {
+        write!(l.boards.out, " {}", l.robot.frame().outputs(i)).map_err(io)?;
+    }
+    writeln!(l.boards.out).map_err(io)
 }
 
 fn main() {
