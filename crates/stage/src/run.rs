@@ -71,7 +71,7 @@ impl std::fmt::Display for Said {
             ),
             Said::Back => f.write_str("the device is back"),
             Said::Joined(who) => write!(f, "session with {who} open"),
-            Said::Left(who) => write!(f, "session with {who} ended; every key released"),
+            Said::Left(who) => write!(f, "session ended: {who}; every key released"),
             Said::Counters(c) => f.write_str(c),
             Said::NoFile => f.write_str("no --robot file to read again; the thesis's robot stays"),
             Said::Refused(path, e) => write!(

@@ -222,6 +222,8 @@ struct Stream {
     receiver: Receiver,
     generation: u64,
     fed_back: Instant,
+    /// Packets from the peer that could not be read.
+    refused: u64,
 }
 
 fn data_loop<T: From<InEvent>>(socket: &UdpSocket, s: &Shared<T>) {
@@ -229,6 +231,7 @@ fn data_loop<T: From<InEvent>>(socket: &UdpSocket, s: &Shared<T>) {
         receiver: Receiver::new(),
         generation: 0,
         fed_back: Instant::now(),
+        refused: 0,
     };
     recv_loop(socket, s, |at, datagram, from| {
         if control::is_control(datagram) {
@@ -307,7 +310,12 @@ fn midi<T: From<InEvent>>(
     let d = match st.receiver.receive(datagram) {
         Ok(d) => d,
         Err(e) => {
-            tracing::warn!(error = %e, "rtpmidi: a packet refused (its loss is repaired from the next one's journal)");
+            // Said when the count of refused packets reaches a power of two: a flood of
+            // them does not flood the log.
+            st.refused += 1;
+            if st.refused.is_power_of_two() {
+                tracing::warn!(error = %e, refused = st.refused, "rtpmidi: a packet from the peer refused");
+            }
             return;
         }
     };

@@ -450,7 +450,7 @@ mod tests {
             .iter()
             .map(|c| (c.delta, c.bytes.as_slice()))
             .collect();
-        assert_eq!(got, [(0, &cmds[0].1[..]), (0, cmds[1].1), (390, cmds[2].1)]);
+        assert_eq!(got, [(0, cmds[0].1), (0, cmds[1].1), (390, cmds[2].1)]);
         assert_eq!(m.journal, Some(&[0x00, 0x12, 0x34][..]));
         assert!(p[12] & 0x80 == 0, "12 bytes: the short header");
         let six = [(0, &[0x90, 60, 1][..]); 6];
