@@ -22,6 +22,9 @@ pub const ANSWER_WITHIN: Duration = Duration::from_secs(5);
 /// How often an unanswered invitation is sent again.
 pub const ASK_AGAIN: Duration = Duration::from_millis(250);
 
+/// The longest the goodbye waits for the receiver's feedback on the last packet.
+pub const LAST_WORD: Duration = Duration::from_millis(100);
+
 /// The name orch gives itself in a session.
 pub const NAME: &str = "orch";
 
@@ -262,8 +265,22 @@ impl RtpMidiOut {
         }
     }
 
+    /// Waits up to [`LAST_WORD`] for the receiver's feedback on the last packet sent (a
+    /// peer that sends none gets the whole wait), so that the goodbye does not overtake it:
+    /// the two go to different ports, and a receiver that reads the goodbye first drops the
+    /// packet.
+    fn settle(&mut self) {
+        let deadline = Instant::now() + LAST_WORD;
+        let last = self.sender.next_seq().wrapping_sub(1);
+        while Instant::now() < deadline && self.sender.checkpoint() != last.wrapping_add(1) {
+            std::thread::sleep(Duration::from_millis(2));
+            self.poll_peer();
+        }
+    }
+
     fn bye(&mut self) {
         if !self.closed {
+            self.settle();
             let _ = self.ctl.send_to(
                 &control::write(&Control::Bye(self.exchange())),
                 self.peer_ctl,
