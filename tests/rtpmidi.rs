@@ -380,10 +380,7 @@ fn a_lost_note_off_and_a_lost_pedal_release_are_recovered_from_the_journal() {
     let t = |n: usize| ws.iter().filter(|w| w.address == 0x22).nth(n).unwrap().t_us;
     assert!(t(2) - t(1) >= 150_000 && t(2) - t(1) < 1_000_000, "{ws:?}");
     let err = stderr.lock().unwrap().clone();
-    assert!(
-        err.contains("0 keys cut by the watchdog") || !err.contains("cut by the watchdog"),
-        "{err}"
-    );
+    assert!(err.contains("session with `lossy`"), "{err}");
     stop(child, &lines);
     let _ = std::fs::remove_file(robot);
 }
