@@ -161,7 +161,10 @@ fn midi_list(list: &[u8], z: bool) -> Result<Vec<Command>, PacketError> {
         }
         first = false;
         let bytes = command(&mut r, &mut running)?;
-        commands.push(Command { delta: t, bytes });
+        if !bytes.is_empty() {
+            // (An empty last SysEx segment whose 0xF7 was dropped, `F7 F5`, carries nothing.)
+            commands.push(Command { delta: t, bytes });
+        }
     }
     Ok(commands)
 }
