@@ -36,14 +36,11 @@ fn check_packet(data: &[u8]) {
         assert!(!c.bytes.is_empty(), "an empty command");
         assert!(whole(&c.bytes), "not a whole message: {:02x?}", c.bytes);
     }
-    let messages = p
-        .commands
-        .iter()
-        .all(|c| match c.bytes[0] {
-            0xF0 => c.bytes.ends_with(&[0xF7]),
-            0xF7 => false, // a cancel: no command of its own
-            s => s >= 0x80,
-        });
+    let messages = p.commands.iter().all(|c| match c.bytes[0] {
+        0xF0 => c.bytes.ends_with(&[0xF7]),
+        0xF7 => false, // a cancel: no command of its own
+        s => s >= 0x80,
+    });
     if messages && !p.commands.is_empty() {
         let list: Vec<(u32, &[u8])> = p.commands.iter().map(|c| (c.delta, &c.bytes[..])).collect();
         let again = packet::write(p.header, &list, p.journal);
