@@ -32,7 +32,7 @@
 //! ## Cargo features
 //!
 //! - `alsa` (off by default): `alsa:CLIENT:PORT` outputs and `alsa:` / `alsa:CLIENT:PORT`
-//!   inputs, ALSA sequencer ports ([`alsa_seq`]). It links alsa-lib (`libasound2-dev` to
+//!   inputs, ALSA sequencer ports (the `alsa_seq` module). It links alsa-lib (`libasound2-dev` to
 //!   build).
 //!
 //! Without it no system library is needed: serial ports through `serialport` without
