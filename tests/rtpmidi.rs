@@ -507,6 +507,7 @@ fn orch_play_into_pymidis_server_sends_what_udp_sends() {
     play(&format!("rtpmidi:127.0.0.1:{port}"));
     std::thread::sleep(Duration::from_millis(300));
     let _ = server.kill();
+    let _ = server.wait();
     let events: Vec<Value> = lines.lock().unwrap().iter().map(|l| l.1.clone()).collect();
     let got: Vec<(&str, u8, u8)> = events
         .iter()
