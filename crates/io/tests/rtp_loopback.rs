@@ -60,7 +60,9 @@ fn an_invitation_nobody_answers_is_an_error_naming_the_peer() {
     let silent = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
     let port = silent.local_addr().unwrap().port();
     let t0 = std::time::Instant::now();
-    let e = RtpMidiOut::open(&format!("127.0.0.1:{port}")).unwrap_err().to_string();
+    let e = RtpMidiOut::open(&format!("127.0.0.1:{port}"))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("no answer to the invitation"), "{e}");
     assert!(t0.elapsed() >= orch_io::rtp::out::ANSWER_WITHIN);
 }
