@@ -137,6 +137,7 @@ impl Setup {
                     max_on: Duration::from_millis(20 + h[1] as u32),
                 }
             }),
+            max_pulse: GuardConfig::DEFAULT.max_pulse,
         };
         let channels = if flags & 0x04 != 0 {
             ChannelMask(u16::from_le_bytes([h[1], h[1].rotate_left(3)]))

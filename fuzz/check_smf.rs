@@ -177,7 +177,7 @@ impl Settings {
 
     fn rules(&self, compensation: bool) -> PlanRules {
         PlanRules {
-            keys: KeyMap {
+            keys: KeyMap::new(orch_core::Config {
                 channels: ChannelMask(self.channels),
                 range: KeyRange::new(Note::from_bits(36), Note::from_bits(96)).expect("36..=96"),
                 out_of_range: if self.fold {
@@ -185,7 +185,8 @@ impl Settings {
                 } else {
                     OutOfRange::Drop
                 },
-            },
+                ..orch_perform::thesis_config()
+            }),
             press_lead_us: vec![self.press_us; 61],
             press_lead_by_velocity_us: Vec::new(),
             release_lead_us: vec![self.release_us; 61],

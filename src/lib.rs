@@ -36,7 +36,7 @@ pub fn run(command: cli::Command) -> anyhow::Result<()> {
         cli::Command::Interpret(args) => interpret::run(&args),
         cli::Command::Play(args) => play::run_play(&args),
         cli::Command::Analyze(args) => analyze::run(&args),
-        cli::Command::Config(args) => robot::print_default(&args.boards),
+        cli::Command::Config(args) => robot::print_default(&args.instrument, &args.boards),
         cli::Command::Baton(args) => baton::run(&args),
         cli::Command::Run(args) => run::run(&args),
         cli::Command::Conduct(args) => conduct::run(&args),

@@ -5,16 +5,21 @@
 
 pub use orch_robot::{HostInterpreter, Robot, RobotError, DEFAULT_TOML, MAX_BOARDS, MAX_KEYS};
 
-/// `orch config [--boards KIND]`: prints the default configuration for that kind of board,
-/// commented.
-pub fn print_default(boards: &str) -> anyhow::Result<()> {
+/// `orch config [--instrument NAME] [--boards KIND]`: prints the complete configuration of
+/// that instrument on that kind of board, commented.
+pub fn print_default(instrument: &str, boards: &str) -> anyhow::Result<()> {
+    use orch_robot::{BoardKind, Instrument};
     use std::io::Write;
     let kind = if boards == "pca9685" {
-        orch_robot::BoardKind::Pwm
+        BoardKind::Pwm
     } else {
-        orch_robot::BoardKind::OnOff
+        BoardKind::OnOff
     };
+    let instrument = Instrument::ALL
+        .into_iter()
+        .find(|i| i.name() == instrument)
+        .ok_or_else(|| anyhow::anyhow!("no instrument {instrument:?}"))?;
     let mut out = std::io::stdout().lock();
-    out.write_all(orch_robot::default_toml(kind).as_bytes())?;
+    out.write_all(orch_robot::instrument_toml(instrument, kind).as_bytes())?;
     Ok(())
 }

@@ -3,9 +3,13 @@
 #[cfg(feature = "dynamics")]
 use crate::dynamics::Dynamics;
 use crate::dynamics::DynamicsError;
-use crate::keymap::{KeyRange, Layout, OutOfRange};
+use crate::keymap::{KeyOf, KeyRange, Layout, OutOfRange};
+use crate::outcome::DropReason;
+#[cfg(feature = "strike")]
+use crate::strike::{StrikeError, Strikes};
 use crate::time::Duration;
 use crate::values::ChannelMask;
+use crate::values::{Channel, Note};
 
 /// The longest any guard limit may be: 30 minutes. Per-key times are kept in 32 bits of
 /// microseconds (71 minutes), and the guard needs half that range to tell old from new.
@@ -23,6 +27,7 @@ pub const MAX_LIMIT: Duration = Duration::from_secs(30 * 60);
 /// | [`min_press`](Self::min_press) | 20 ms | How long a delayed re-strike is held when its note was already released before it could strike (a note shorter than the rest it had to wait for). It still sounds, rather than being lost: the DIY pianos strike at full power for about 18 ms. Notes that strike on time are released when their Note-Off says. |
 /// | [`late_limit`](Self::late_limit) | 30 ms | A re-strike that would have to wait longer than this for its key's rest is dropped (counted as too fast) instead of sounding late: people hear a note as late from about 20–30 ms, and a late note in a fast repeated figure would push every later one further behind. |
 /// | [`duty`](Self::duty) | 30 s in any 60 s | Energised time per key. The hold limit misses a key struck again just before it expires (struck every 9.9 s it is powered 99 % of the time). Small push solenoids are rated for intermittent duty, commonly 25–50 %, and one held on continuously runs hot within a minute: so a key may be on at most half of a minute. Music never comes near it (a legato repeated note is on about 90 % of the time only for a few bars); a stuck stream does. See [`DutyLimit`]. |
+/// | [`max_pulse`](Self::max_pulse) | 100 ms | The hard limit on a strike's pulse (feature `strike`). Above the 75 ms that TheDitis/AutoDrum gives its biggest solenoids' loudest strikes and well above the 8–20 ms of the open drum and glockenspiel builds; a beater held against its bar much longer mutes it. |
 /// | [`watchdog`](Self::watchdog) | 4 s | If no byte arrives this long while keys are down, the sender is taken as gone and every key is released. Longer than the silences of held chords in slow music, much shorter than the minute in which a held solenoid overheats. Once an Active Sensing byte (0xFE) has been seen, the specification's 300 ms applies as well. |
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct GuardConfig {
@@ -45,6 +50,12 @@ pub struct GuardConfig {
     /// The most a key may be energised over time; `None`: no limit. Needs the `duty-limit`
     /// feature (on by default; without it the default is `None` and `Some` is refused).
     pub duty: Option<DutyLimit>,
+    /// The longest a strike's pulse may last ([`strike`](crate::strike)): a beater left on
+    /// its bar mutes it, and a stuck output burns its coil. No strike output may be given a
+    /// longer pulse, and a pulse is ended at this age whatever else happens. At most
+    /// [`MAX_PULSE`](crate::strike::MAX_PULSE). Needs the `strike` feature.
+    #[cfg(feature = "strike")]
+    pub max_pulse: Duration,
 }
 
 /// A limit on each key's energised time: at most `max_on` in a window of `window`.
@@ -112,6 +123,8 @@ impl GuardConfig {
         } else {
             None
         },
+        #[cfg(feature = "strike")]
+        max_pulse: Duration::from_millis(100),
     };
 
     /// The guard switched off.
@@ -130,6 +143,8 @@ impl GuardConfig {
         watchdog: None,
         late_limit: None,
         duty: None,
+        #[cfg(feature = "strike")]
+        max_pulse: crate::strike::MAX_PULSE,
     };
 }
 
@@ -163,6 +178,11 @@ pub struct Config<const B: usize> {
     /// 768 bytes, kept out of small MCUs' RAM).
     #[cfg(feature = "dynamics")]
     pub dynamics: Dynamics,
+    /// The strike groups beside the keyboard (drums, mallets) and their outputs' pulses.
+    /// Default: none ([`Strikes::NONE`]). See [`strike`](crate::strike). Needs the `strike`
+    /// feature.
+    #[cfg(feature = "strike")]
+    pub strikes: Strikes,
 }
 
 impl Config<4> {
@@ -177,6 +197,8 @@ impl Config<4> {
         guard: GuardConfig::DEFAULT,
         #[cfg(feature = "dynamics")]
         dynamics: Dynamics::ON_OFF,
+        #[cfg(feature = "strike")]
+        strikes: Strikes::NONE,
     };
 }
 
@@ -253,6 +275,9 @@ pub enum ConfigError {
     DutyUnsupported,
     /// The dynamics cannot be played: see [`DynamicsError`].
     Dynamics(DynamicsError),
+    /// The strike groups cannot be played: see [`StrikeError`](crate::StrikeError).
+    #[cfg(feature = "strike")]
+    Strike(StrikeError),
 }
 
 impl core::fmt::Display for ConfigError {
@@ -277,6 +302,8 @@ impl core::fmt::Display for ConfigError {
                 f.write_str("guard duty limit: this build has no duty-limit feature")
             }
             ConfigError::Dynamics(e) => write!(f, "dynamics: {e}"),
+            #[cfg(feature = "strike")]
+            ConfigError::Strike(e) => write!(f, "strike groups: {e}"),
             ConfigError::BadDuty => f.write_str(
                 "guard duty limit: max_on must be above 0, at most the window and at most 60 s",
             ),
@@ -287,11 +314,89 @@ impl core::fmt::Display for ConfigError {
 impl core::error::Error for ConfigError {}
 
 impl<const B: usize> Config<B> {
+    /// How many keys (outputs) the robot has: the keyboard's and the strike groups'.
+    #[inline(always)]
+    pub fn keys(&self) -> usize {
+        #[cfg(feature = "strike")]
+        if self.strikes.count > 0 || !self.strikes.keyboard {
+            return self.keyboard_keys() + self.strikes.outputs();
+        }
+        self.range.keys()
+    }
+
+    /// How many keys the keyboard has: `range`'s, or 0 for a robot without one.
+    #[inline(always)]
+    pub fn keyboard_keys(&self) -> usize {
+        #[cfg(feature = "strike")]
+        if !self.strikes.keyboard {
+            return 0;
+        }
+        self.range.keys()
+    }
+
+    /// Where a note on `channel` lands: a strike group's output, else the keyboard's key (see
+    /// [`strike`](crate::strike)), or why it does not play. Channel 10, General MIDI's
+    /// percussion, when nothing listens to it: [`DropReason::Percussion`].
+    #[inline(always)]
+    pub fn land(&self, channel: Channel, note: Note) -> Result<KeyOf, DropReason> {
+        #[cfg(feature = "strike")]
+        {
+            use crate::strike::StrikeMiss;
+            let miss = match self.strikes.find(channel, note) {
+                Some(Ok(of)) => return Ok(of),
+                Some(Err(StrikeMiss::Unmapped)) => Some(DropReason::Unmapped),
+                Some(Err(StrikeMiss::Range)) => Some(DropReason::Range),
+                None => None,
+            };
+            self.keyboard_key(channel, note)
+                .map_err(|reason| miss.unwrap_or(reason))
+        }
+        #[cfg(not(feature = "strike"))]
+        self.keyboard_key(channel, note)
+    }
+
+    /// The keyboard's key for a note on `channel`, or why it has none.
+    #[inline(always)]
+    fn keyboard_key(&self, channel: Channel, note: Note) -> Result<KeyOf, DropReason> {
+        if self.keyboard_keys() == 0 || !self.channels.contains(channel) {
+            return Err(if channel.get() == 9 {
+                DropReason::Percussion
+            } else {
+                DropReason::Channel
+            });
+        }
+        self.range
+            .key_for(note, self.out_of_range)
+            .ok_or(DropReason::Range)
+    }
+
+    /// Whether `key` is a strike group's output: a pulse that ends by itself, its Note-Off
+    /// ignored.
+    #[inline(always)]
+    pub fn is_strike(&self, key: u8) -> bool {
+        #[cfg(feature = "strike")]
+        return self.strikes.pulse(key).is_strike();
+        #[cfg(not(feature = "strike"))]
+        {
+            let _ = key;
+            false
+        }
+    }
+
     /// Checks that an interpreter with room for `capacity` keys can run this configuration.
     pub fn validate(&self, capacity: usize) -> Result<(), ConfigError> {
-        let keys = self.range.keys();
+        let keys = self.keys();
         if keys > capacity {
             return Err(ConfigError::TooManyKeys { keys, capacity });
+        }
+        #[cfg(feature = "strike")]
+        if self.strikes.count > 0 || !self.strikes.keyboard {
+            if self.strikes.count > 0 && !self.guard.enabled {
+                return Err(ConfigError::Strike(StrikeError::GuardOff));
+            }
+            self.strikes
+                .validate(self.range.keys(), self.layout.keys(), self.guard.max_pulse)
+                .map_err(ConfigError::Strike)?;
         }
         if self.layout.keys() != keys {
             return Err(ConfigError::LayoutKeys {

@@ -249,6 +249,8 @@ const NO_STATS: Stats = Stats {
     folded: 0,
     folded_octaves: 0,
     dropped_channel: 0,
+    dropped_percussion: 0,
+    dropped_unmapped: 0,
     dropped_range: 0,
     dropped_power: 0,
     dropped_cancelled: 0,
@@ -316,7 +318,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         match self.fingers.phase(key) {
             DOWN => KeyPhase::Down,
             PENDING => KeyPhase::Waiting,
-            RELEASING if g.enabled && self.fingers.age(key, self.clock) < rest_us(g) => {
+            RELEASING if g.enabled && self.fingers.age(key, self.clock) < self.rest(key) => {
                 KeyPhase::Resting
             }
             _ => KeyPhase::Up,
@@ -342,14 +344,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// or end the transaction with no data if it does not.
     pub fn board_ahead(&self) -> Option<BoardId> {
         let (channel, note) = self.decoder.note_ahead()?;
-        if !self.config.channels.contains(channel) {
-            return None;
-        }
-        let key = self
-            .config
-            .range
-            .key_for(note, self.config.out_of_range)?
-            .key;
+        let key = self.route(channel, note).ok()?.key;
         let f = self.config.layout.finger(key)?;
         Some(BoardId {
             index: f.board,
@@ -373,11 +368,17 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             return Duty::OFF;
         }
         #[cfg(feature = "dynamics")]
-        return self.config.dynamics.duty_at(
-            key,
-            self.velocity(key),
-            self.fingers.age(key, self.clock),
-        );
+        return if self.is_strike(key) {
+            // A strike's pulse is at its velocity's duty throughout: no hold.
+            self.config
+                .dynamics
+                .touch(key)
+                .strike_duty(self.velocity(key))
+        } else {
+            self.config
+                .dynamics
+                .duty_at(key, self.velocity(key), self.fingers.age(key, self.clock))
+        };
         #[cfg(not(feature = "dynamics"))]
         return Duty::FULL;
     }
@@ -671,8 +672,6 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         }
         let g = &self.config.guard;
         let hold = g.max_hold.map(Duration::as_micros);
-        let min_press = g.min_press.as_micros();
-        let gap = rest_us(g);
         // The next per-key deadline, in µs from now.
         // (`u32::MAX`: none. No timer is that long: every limit is at most `MAX_LIMIT`, and a
         // key struck with no limit at all has no deadline. One compare where an `Option` took
@@ -697,6 +696,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             let Some(key) = key else { break };
             from = key + 1;
             let age = self.fingers.age(key, now);
+            let min_press = self.press_len(key);
             if self.fingers.phase(key) == DOWN {
                 let duty = self.duty_cut_after(key);
                 let short = self.fingers.has(key, RELEASE_AFTER);
@@ -723,7 +723,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                         soonest(limit - age);
                     }
                 }
-            } else if age >= gap {
+            } else if age >= self.rest(key) {
                 // PENDING: the rest is over, it strikes.
                 let folded = self.fingers.has(key, FOLDED);
                 self.count_sounded(folded);
@@ -738,7 +738,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 }
                 soonest(limit);
             } else {
-                soonest(gap - age);
+                soonest(self.rest(key) - age);
             }
         }
         self.due = if next == u32::MAX {
@@ -749,7 +749,41 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     }
 
     fn keys(&self) -> u8 {
-        self.config.range.keys() as u8
+        self.config.keys() as u8
+    }
+
+    /// Whether `key` is a strike group's output ([`strike`](crate::strike)): its press is a
+    /// pulse that ends by itself.
+    #[inline(always)]
+    fn is_strike(&self, key: u8) -> bool {
+        self.config.is_strike(key)
+    }
+
+    /// How long a press of `key` flagged `RELEASE_AFTER` lasts, in µs: a strike output's
+    /// pulse at its velocity (never past the guard's `max_pulse`), a key's `min_press`.
+    #[inline(always)]
+    fn press_len(&self, key: u8) -> u32 {
+        #[cfg(feature = "strike")]
+        if self.is_strike(key) {
+            let pulse = self.config.strikes.pulse(key).length(self.velocity(key));
+            return pulse.min(self.config.guard.max_pulse).as_micros();
+        }
+        let _ = key;
+        self.config.guard.min_press.as_micros()
+    }
+
+    /// How long after its stamp a released `key` rests before it may strike again, in µs:
+    /// the guard's re-strike gap (at least 1 µs) from its release for a key; for a strike
+    /// output its rebound from its last strike (a strike output keeps its strike's stamp
+    /// when its pulse ends or is cut: see [`release_now`](Self::release_now)).
+    #[inline(always)]
+    fn rest(&self, key: u8) -> u32 {
+        #[cfg(feature = "strike")]
+        if self.is_strike(key) {
+            return self.config.strikes.pulse(key).rebound.as_micros().max(1);
+        }
+        let _ = key;
+        rest_us(&self.config.guard)
     }
 
     /// The clock as last seen.
@@ -853,7 +887,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     #[inline(always)]
     fn strike_end(&self, key: u8) -> u32 {
         #[cfg(feature = "dynamics")]
-        {
+        if !self.is_strike(key) {
             let d = &self.config.dynamics;
             let touch = d.touch(key);
             if touch.strike_duty(self.velocity(key)) != touch.hold {
@@ -930,7 +964,12 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         let dynamics = &self.config.dynamics;
         let touch = dynamics.touch(key);
         let strike_duty = touch.strike_duty(self.velocity(key)).get() as u64;
-        let hold_duty = touch.hold.get() as u64;
+        // A strike output has no hold: its pulse is at its strike duty to the end.
+        let hold_duty = if self.is_strike(key) {
+            strike_duty
+        } else {
+            touch.hold.get() as u64
+        };
         let s = dynamics.strike.as_micros() as u64;
         // Heat in µs at full power: a key at duty `x` (4095ths) adds (x − allowed) / 4095 µs
         // of it each µs.
@@ -993,6 +1032,11 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         }
     }
 
+    #[inline(always)]
+    fn route(&self, channel: Channel, note: Note) -> Result<KeyOf, DropReason> {
+        self.config.land(channel, note)
+    }
+
     fn note_on<S: NoteSink>(
         &mut self,
         channel: Channel,
@@ -1010,17 +1054,18 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 reason,
             })
         };
-        if !self.config.channels.contains(channel) {
-            self.count(|s| s.dropped_channel += 1);
-            drop(sink, None, DropReason::Channel);
-            return;
-        }
-        let Some(KeyOf { key, octaves }) =
-            self.config.range.key_for(note, self.config.out_of_range)
-        else {
-            self.count(|s| s.dropped_range += 1);
-            drop(sink, None, DropReason::Range);
-            return;
+        let (key, octaves) = match self.route(channel, note) {
+            Ok(KeyOf { key, octaves }) => (key, octaves),
+            Err(reason) => {
+                self.count(|s| match reason {
+                    DropReason::Channel => s.dropped_channel += 1,
+                    DropReason::Percussion => s.dropped_percussion += 1,
+                    DropReason::Unmapped => s.dropped_unmapped += 1,
+                    _ => s.dropped_range += 1,
+                });
+                drop(sink, None, reason);
+                return;
+            }
         };
         let at = Landing { key, octaves };
         let folded = octaves != 0;
@@ -1038,6 +1083,19 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         let with_strike = phase == PENDING
             || (phase == DOWN && g.enabled && self.fingers.age(key, now) < g.min_press.as_micros());
         let joins = with_strike || (!repeated && self.config.overlap == Overlap::Hold);
+        if busy && self.is_strike(key) {
+            // A strike arriving while its beater's pulse is on, or while it waits to strike,
+            // is the same hit.
+            self.count_sounded(folded);
+            self.count(|s| s.joined += 1);
+            sink.note(NoteEvent::Joined {
+                channel,
+                note,
+                at,
+                with_strike: true,
+            });
+            return;
+        }
         if busy && joins && self.played(key) {
             // Another note holds the key already: this one joins it.
             if self.notes.insert(channel, note, key) {
@@ -1083,8 +1141,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         // How long the strike would wait for the key's rest.
         let wait = match phase {
             _ if !g.enabled => 0,
-            DOWN => rest_us(&g),
-            RELEASING | PENDING => rest_us(&g).saturating_sub(self.fingers.age(key, now)),
+            DOWN => self.rest(key),
+            RELEASING | PENDING => self.rest(key).saturating_sub(self.fingers.age(key, now)),
             _ => 0,
         };
         if g.late_limit.is_some_and(|l| wait > l.as_micros()) {
@@ -1093,7 +1151,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             drop(sink, Some(at), DropReason::TooFast);
             return;
         }
-        if !self.notes.insert(channel, note, key) {
+        // A strike's note is no key's: its pulse ends by itself and its Note-Off does nothing.
+        if !self.is_strike(key) && !self.notes.insert(channel, note, key) {
             self.count(|s| s.dropped_power += 1);
             drop(sink, Some(at), DropReason::Power);
             return;
@@ -1108,7 +1167,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             sink.note(NoteEvent::Waiting { channel, note, at });
             self.fingers.set_velocity(key, velocity.get());
             self.fingers.set_flag(key, FOLDED, folded);
-            self.fingers.set_flag(key, RELEASE_AFTER, false);
+            self.fingers
+                .set_flag(key, RELEASE_AFTER, self.is_strike(key));
             return;
         }
         if phase == DOWN {
@@ -1166,7 +1226,9 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             let phase = self.fingers.phase(key);
             // A key striking for `min_press` (RELEASE_AFTER) is no note's any more: it lets
             // go by itself.
-            let busy = (phase == DOWN || phase == PENDING) && !self.fingers.has(key, RELEASE_AFTER);
+            let busy = (phase == DOWN || phase == PENDING)
+                && !self.fingers.has(key, RELEASE_AFTER)
+                && !self.is_strike(key);
             if busy && !self.held(key) {
                 self.release_key(key, now);
             }
@@ -1209,9 +1271,9 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         let g = self.config.guard;
         let resting = self.fingers.phase(key) == RELEASING
             && g.enabled
-            && self.fingers.age(key, now) < rest_us(&g);
+            && self.fingers.age(key, now) < self.rest(key);
         if resting {
-            let wait = rest_us(&g) - self.fingers.age(key, now);
+            let wait = self.rest(key) - self.fingers.age(key, now);
             self.fingers.set_phase(key, PENDING);
             self.fingers.set_flag(key, FOLDED, folded);
             self.count(|s| s.restrikes_delayed += 1);
@@ -1220,11 +1282,14 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         } else {
             self.count_sounded(folded);
             self.press_now(key, now);
-            let limit = g
+            let mut limit = g
                 .max_hold
                 .map_or(u32::MAX, Duration::as_micros)
                 .min(self.duty_cut_after(key).unwrap_or(u32::MAX))
                 .min(self.strike_end(key));
+            if self.is_strike(key) {
+                limit = limit.min(self.press_len(key));
+            }
             if g.enabled && limit != u32::MAX {
                 self.due = self.due.min(now.wrapping_add(limit));
             }
@@ -1250,6 +1315,10 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         }
         self.fingers.enter(key, DOWN, now);
         self.fingers.set_flag(key, FOLDED, false);
+        if self.is_strike(key) {
+            // A strike's pulse ends by itself, whatever its note does.
+            self.fingers.set_flag(key, RELEASE_AFTER, true);
+        }
         if let Some(f) = self.config.layout.finger(key) {
             self.frame.set(f.board, f.bit, true);
         }
@@ -1302,10 +1371,25 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 let (on, window) = (d.max_on.as_micros() as u64, d.window.as_micros() as u64);
                 let down = self.fingers.age(key, now);
                 #[cfg(feature = "dynamics")]
-                let energy = self.config.dynamics.energy(key, self.velocity(key), down);
+                let energy = if self.is_strike(key) {
+                    let duty = self
+                        .config
+                        .dynamics
+                        .touch(key)
+                        .strike_duty(self.velocity(key));
+                    (down as u64 * duty.get() as u64).div_ceil(Duty::FULL.get() as u64)
+                } else {
+                    self.config.dynamics.energy(key, self.velocity(key), down)
+                };
                 #[cfg(not(feature = "dynamics"))]
                 let energy = down as u64;
-                let cooled = down as u64 * on / window.max(1);
+                // A strike output keeps its strike's stamp (below): its cooling is counted from
+                // the strike at its next press, the pulse included.
+                let cooled = if self.is_strike(key) {
+                    0
+                } else {
+                    down as u64 * on / window.max(1)
+                };
                 let heat =
                     (self.fingers.heat_ms(key) as u64 * 1000 + energy).saturating_sub(cooled);
                 self.fingers.set_heat_ms(key, heat.div_ceil(1000));
@@ -1313,11 +1397,22 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 // It heated at (1 − duty) while it was down; rounded up, to be safe.
                 let (on, window) = (d.max_on.as_micros() as u64, d.window.as_micros() as u64);
                 let down = self.fingers.age(key, now) as u64;
-                let added = down * window.saturating_sub(on) / window.max(1);
+                let added = if self.is_strike(key) {
+                    // Cooled from its strike at the next press (below).
+                    down
+                } else {
+                    down * window.saturating_sub(on) / window.max(1)
+                };
                 let heat = self.fingers.heat_ms(key) as u64 + added.div_ceil(1000);
                 self.fingers.set_heat_ms(key, heat);
             }
-            self.fingers.enter(key, RELEASING, now);
+            if self.is_strike(key) {
+                // Its rebound is counted from its strike, however short the pulse (a pulse cut
+                // by a reset or the watchdog too): the stamp stays the strike's.
+                self.fingers.set_phase(key, RELEASING);
+            } else {
+                self.fingers.enter(key, RELEASING, now);
+            }
             if let Some(f) = self.config.layout.finger(key) {
                 self.frame.set(f.board, f.bit, false);
             }

@@ -19,6 +19,8 @@
 //!   handed to a [`NoteSink`] by the `*_with` methods as it is decided.
 //! - [`Dynamics`]: velocity as strike strength on PWM boards: each press a strike at the
 //!   velocity's duty on the key's curve ([`Touch`]), then a hold ([`dynamics`]).
+//! - [`Strikes`]: strike groups (drums, mallets) beside or instead of the keyboard: a note
+//!   fires its output for a pulse that ends by itself ([`strike`]).
 //! - [`FingerBoards`]: the one output trait, implemented by real boards (`orch-boards`), the
 //!   virtual robot and the [`Recording`] test double.
 //!
@@ -51,11 +53,12 @@
 //! | held notes, [`NoteTable`] (the default: every channel of every note, played and sustained, exact under any load) | 512 |
 //! | frame 18 (with its mask of the boards touched since the last flush), decoder 12 (28 with `stats`: its counters), clock 8, last input 4 and kept deadlines 10 (32-bit, see below), pedals and flags | ≈ 60 |
 //! | the configuration (none with a constant one: [`Thesis`]) | 68 |
-//! | the statistics and the decoder's counters (feature `stats`, off on the ATmega16) | 80 (+8 padding) |
+//! | the statistics and the decoder's counters (feature `stats`, off on the ATmega16) | 88 (+8 padding) |
 //! | dynamics (feature `dynamics`, off on the ATmega16): the configuration's per-key [`Touch`] table and strike time (772), the duties last written to 4 boards (128) | 900 |
+//! | strike groups (feature `strike`, off on the ATmega16): every key's pulse (1536), the sparse groups' note maps (512) and the groups, in the configuration | 2088 |
 //! | `Interpreter<4, 61, NotePool<32>>` without `duty-limit` and `stats` | 616 |
 //! | **`Interpreter<4, 61, NotePool<32>, Thesis>` without `duty-limit` and `stats`: the ATmega16 build** | **544** |
-//! | **[`Interpreter`] with [`NoteTable`], the duty limit, the statistics and dynamics: the host's** | **2132** |
+//! | **[`Interpreter`] with [`NoteTable`], the duty limit, the statistics, dynamics and strike groups: the host's** | **4228** |
 //!
 //! AVR has no padding, so the ATmega16 figure is a few bytes lower (536). The [`Decoder`]
 //! alone takes 12 bytes (28 with `stats`).
@@ -87,6 +90,9 @@
 //!   and a guard that counts current and energy instead of keys. 900 bytes of RAM with a
 //!   configuration in RAM (its per-key table), 128 with a constant one. Without it every key
 //!   is on/off. The ATmega16 firmware builds without it.
+//! - `strike` (default): strike groups beside or instead of the keyboard (drums, mallets:
+//!   [`strike`]), pulses that end by themselves. 2088 bytes of configuration in RAM, none with
+//!   a constant one. The ATmega16 firmware builds without it.
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -105,6 +111,8 @@ mod outcome;
 mod output;
 mod recording;
 mod stats;
+#[cfg(feature = "strike")]
+pub mod strike;
 mod time;
 mod values;
 
@@ -122,5 +130,7 @@ pub use outcome::{DropReason, Landing, NoteEvent, NoteSink};
 pub use output::{full_or_off, on_off, BoardId, BoardKind, FingerBoards};
 pub use recording::{Nack, Recording, Write};
 pub use stats::Stats;
+#[cfg(feature = "strike")]
+pub use strike::{Pulse, StrikeError, StrikeGroup, StrikeNotes, Strikes};
 pub use time::{Duration, Instant};
 pub use values::{Channel, ChannelMask, InvalidValue, Note, Velocity, U14, U7};

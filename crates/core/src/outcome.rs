@@ -15,6 +15,12 @@ use crate::values::{Channel, Note};
 pub enum DropReason {
     /// On a channel the robot does not listen to.
     Channel,
+    /// On channel 10, General MIDI's percussion, which no group of the robot listens to: a
+    /// keyboard leaves drum notes alone by default; a strike group (a drum kit) would play
+    /// them.
+    Percussion,
+    /// A strike group listens to its channel but has no output for it: a drum the kit lacks.
+    Unmapped,
     /// Outside the keys, with the drop policy (or no key of its pitch class).
     Range,
     /// Past the power budget (`max_keys_down`), or the store of held notes was full.
@@ -36,8 +42,10 @@ pub enum DropReason {
 
 impl DropReason {
     /// Every reason, in report order.
-    pub const ALL: [DropReason; 7] = [
+    pub const ALL: [DropReason; 9] = [
         DropReason::Channel,
+        DropReason::Percussion,
+        DropReason::Unmapped,
         DropReason::Range,
         DropReason::Power,
         DropReason::TooFast,
@@ -46,11 +54,13 @@ impl DropReason {
         DropReason::Stopped,
     ];
 
-    /// The reason's name in reports: `channel`, `range`, `power`, `too_fast`, `too_soft`,
-    /// `cancelled`, `stopped`.
+    /// The reason's name in reports: `channel`, `percussion`, `unmapped`, `range`, `power`,
+    /// `too_fast`, `too_soft`, `cancelled`, `stopped`.
     pub const fn name(self) -> &'static str {
         match self {
             DropReason::Channel => "channel",
+            DropReason::Percussion => "percussion",
+            DropReason::Unmapped => "unmapped",
             DropReason::Range => "range",
             DropReason::Power => "power",
             DropReason::TooFast => "too_fast",
@@ -111,8 +121,8 @@ pub enum NoteEvent {
         channel: Channel,
         /// The note.
         note: Note,
-        /// Its key, if it has one (not for [`DropReason::Channel`] and
-        /// [`DropReason::Range`]).
+        /// Its key, if it has one (not for [`DropReason::Channel`],
+        /// [`DropReason::Percussion`], [`DropReason::Unmapped`] and [`DropReason::Range`]).
         at: Option<Landing>,
         /// Why.
         reason: DropReason,

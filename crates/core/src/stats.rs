@@ -37,6 +37,11 @@ pub struct Stats {
     pub joined: u32,
     /// Notes on a channel not listened to.
     pub dropped_channel: u32,
+    /// Notes on channel 10 (General MIDI's percussion) that no group listens to: by default
+    /// a keyboard leaves them alone, and a drum group would play them.
+    pub dropped_percussion: u32,
+    /// Notes a strike group listens to but has no output for (a drum the kit lacks).
+    pub dropped_unmapped: u32,
     /// Notes with no key: outside the key range with the drop policy, or with the fold policy
     /// on a range too narrow to hold their pitch class.
     pub dropped_range: u32,
@@ -73,10 +78,13 @@ pub struct Stats {
 }
 
 impl Stats {
-    /// All notes dropped, for any reason: `dropped_channel + dropped_range + dropped_power +
-    /// dropped_too_fast + dropped_cancelled + dropped_stopped`.
+    /// All notes dropped, for any reason: `dropped_channel + dropped_percussion +
+    /// dropped_unmapped + dropped_range + dropped_power + dropped_too_fast +
+    /// dropped_cancelled + dropped_stopped`.
     pub const fn dropped(&self) -> u32 {
         self.dropped_channel
+            + self.dropped_percussion
+            + self.dropped_unmapped
             + self.dropped_range
             + self.dropped_power
             + self.dropped_too_fast

@@ -325,7 +325,7 @@ fn stats_add_up() {
     let t = |i: u64| Instant::from_micros(i * 7_000);
     let bytes: [&[u8]; 12] = [
         &[0x90, 60, 100, 61, 100, 62, 100],
-        &[0x99, 60, 100],           // masked channel
+        &[0x99, 60, 100],           // masked channel 10: percussion
         &[0x90, 24, 100, 100, 100], // folded twice
         &[0x90, 63, 100, 64, 100],  // over the budget
         &[0x80, 60, 0],
@@ -344,7 +344,7 @@ fn stats_add_up() {
     let s = *rig.robot.stats();
     assert_eq!(s.note_ons, 14);
     assert_eq!(s.note_ons, s.played + s.folded + s.dropped(), "{s:?}");
-    assert_eq!(s.dropped_channel, 1);
+    assert_eq!((s.dropped_channel, s.dropped_percussion), (0, 1));
     assert!(s.dropped_power >= 1, "{s:?}");
     assert!(s.folded >= 1, "{s:?}");
     assert!(s.peak_keys_down <= 4);

@@ -30,13 +30,16 @@ pub struct NoteLine {
     pub channel: u8,
     /// Its velocity in the file.
     pub velocity: u8,
-    /// The key it landed on (0 = the robot's lowest), `null` if none.
+    /// The output it landed on, `null` if none: the robot's outputs are numbered from 0 in
+    /// board order, the keyboard's keys first (0 = its lowest), then each strike group's
+    /// outputs (a kit's in the order robot.toml lists them, a glockenspiel's bars lowest
+    /// first).
     pub key: Option<u8>,
     /// `on_time`, `late`, `early`, `unison`, `joined`, `dropped`, `unmatched` or `skipped`
     /// (the report's outcomes).
     pub outcome: &'static str,
-    /// Why it was dropped (`channel`, `range`, `power`, `too_fast`, `too_soft`, `cancelled`,
-    /// `stopped`); only for `dropped`.
+    /// Why it was dropped (`channel`, `percussion`, `unmapped`, `range`, `power`, `too_fast`,
+    /// `too_soft`, `cancelled`, `stopped`); only for `dropped`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reason: Option<&'static str>,
     /// When its Note-On was sent, ms.

@@ -117,5 +117,6 @@ pub fn thesis_config() -> orch_core::Config<MAX_BOARDS> {
         overlap: t.overlap,
         guard: t.guard,
         dynamics: t.dynamics,
+        strikes: t.strikes,
     }
 }

@@ -67,16 +67,12 @@ impl Setup {
     /// board write and the link's time; its release lead, its release delay and one write.
     pub fn rules(&self) -> PlanRules {
         let c = &self.config;
-        let keys = c.range.keys();
+        let keys = c.keys();
         let write = self.write_us() + self.link.note_lead_us();
         let m = &self.sim.mechanics;
         let guard = c.guard.enabled;
         PlanRules {
-            keys: crate::plan::KeyMap {
-                channels: c.channels,
-                range: c.range,
-                out_of_range: c.out_of_range,
-            },
+            keys: crate::plan::KeyMap::new(*c),
             press_lead_us: (0..keys)
                 .map(|k| m.for_key(k as u8).press_delay.as_micros() as u64 + write)
                 .collect(),
@@ -513,7 +509,7 @@ where
     if let Some(c) = control {
         c.publish(*planner.time_map());
     }
-    let mut ledger = Ledger::new(setup.config.range.keys());
+    let mut ledger = Ledger::new(setup.config.keys());
     let mut out = match midi {
         Some(out) => Out::Midi {
             out,
@@ -838,7 +834,7 @@ where
         ledger.decided(d.t_us, d.event);
     }
     robot.drain_presses(|p| ledger.press(p));
-    let longest_release = (0..setup.config.range.keys())
+    let longest_release = (0..setup.config.keys())
         .map(|k| {
             setup
                 .sim
@@ -865,7 +861,7 @@ where
         stopped: stopped_at.is_some(),
         jumps,
         replayed: u64::from(offset),
-        dynamic_keys: (0..setup.config.range.keys())
+        dynamic_keys: (0..setup.config.keys())
             .map(|k| !setup.config.dynamics.touch(k as u8).is_full())
             .collect(),
     })

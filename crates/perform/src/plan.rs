@@ -42,7 +42,7 @@
 
 use std::collections::BTreeMap;
 
-use orch_core::{Channel, ChannelMask, DropReason, KeyRange, Landing, Note, OutOfRange, Overlap};
+use orch_core::{Channel, DropReason, Landing, Note, Overlap};
 use orch_seq::WireBytes;
 
 use crate::tempo::{Tempo, TimeMap};
@@ -59,29 +59,30 @@ pub struct ScoreEvent {
     pub bytes: WireBytes,
 }
 
-/// Where notes land: the interpreter's channels, key range and fold policy.
+/// Where notes land, as the interpreter lands them: its keyboard's channels, key range and
+/// fold policy, and its strike groups ([`Config::land`](orch_core::Config::land)).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct KeyMap {
-    /// Channels listened to.
-    pub channels: ChannelMask,
-    /// The keys.
-    pub range: KeyRange,
-    /// Notes outside the keys.
-    pub out_of_range: OutOfRange,
-}
+pub struct KeyMap(orch_core::Config<{ crate::MAX_BOARDS }>);
 
 impl KeyMap {
+    /// The notes of `config`'s robot.
+    pub fn new(config: orch_core::Config<{ crate::MAX_BOARDS }>) -> Self {
+        Self(config)
+    }
+
     /// The key of `note` on `channel` (0..=15), if the robot plays it.
     pub fn land(&self, channel: u8, note: u8) -> Option<Landing> {
-        let ch = Channel::new(channel)?;
-        if !self.channels.contains(ch) {
-            return None;
-        }
-        let k = self.range.key_for(Note::new(note)?, self.out_of_range)?;
+        let k = self.0.land(Channel::new(channel)?, Note::new(note)?).ok()?;
         Some(Landing {
             key: k.key,
             octaves: k.octaves,
         })
+    }
+
+    /// Whether `key` strikes: a pulse that ends by itself, its Note-Off ignored (see
+    /// [`orch_core::strike`]).
+    pub fn strikes(&self, key: usize) -> bool {
+        u8::try_from(key).is_ok_and(|k| self.0.is_strike(k))
     }
 }
 
@@ -724,6 +725,14 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         let k = usize::from(land.key);
         let velocity = bytes.note_on().map_or(0, |(_, _, v)| v);
         let lead = self.rules.press_lead(k, velocity) as i64;
+        if self.rules.keys.strikes(k) {
+            // A strike: sent early by its flight; the interpreter keeps the beater's rebound
+            // (a strike too soon waits, joins or is dropped as too fast there).
+            let at = self.after_controller(ch, w - lead);
+            self.send(at, bytes, Some(id), w);
+            self.mark(ch, k, at);
+            return;
+        }
         let gap = self.rules.restrike_gap_us as i64;
         let min_press = self.rules.min_press_us as i64;
         let p_des = w - lead;
@@ -876,6 +885,12 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
             return;
         };
         let k = usize::from(land.key);
+        if self.rules.keys.strikes(k) {
+            // A strike's Note-Off does nothing: sent at its time.
+            let at = self.after_controller(ch, w);
+            self.send(at, bytes, None, w);
+            return;
+        }
         let lead = self.rules.release_lead_us.get(k).copied().unwrap_or(0) as i64;
         let min_hold_k = self.rules.min_hold_us.get(k).copied().unwrap_or(0) as i64;
         let own_on = self.on_sent[usize::from(ch) * 128 + usize::from(n)];

@@ -101,6 +101,10 @@ impl VelocityError {
 pub struct Dropped {
     /// On a channel the robot does not listen to.
     pub channel: u64,
+    /// On channel 10 (General MIDI's drums), which no group of the robot listens to.
+    pub percussion: u64,
+    /// A strike group listens to its channel but has no output for it.
+    pub unmapped: u64,
     /// Outside the keys, with the drop policy.
     pub range: u64,
     /// Past the power budget.
@@ -119,6 +123,8 @@ impl Dropped {
     /// Every drop.
     pub fn total(&self) -> u64 {
         self.channel
+            + self.percussion
+            + self.unmapped
             + self.range
             + self.power
             + self.too_fast
@@ -165,6 +171,8 @@ impl Outcomes {
                     let d = &mut o.dropped;
                     *match reason {
                         orch_core::DropReason::Channel => &mut d.channel,
+                        orch_core::DropReason::Percussion => &mut d.percussion,
+                        orch_core::DropReason::Unmapped => &mut d.unmapped,
                         orch_core::DropReason::Range => &mut d.range,
                         orch_core::DropReason::Power => &mut d.power,
                         orch_core::DropReason::TooFast => &mut d.too_fast,
@@ -329,8 +337,16 @@ impl Report {
         } else {
             String::new()
         };
+        // Drum notes only where there were any.
+        let mut drums = String::new();
+        if d.percussion > 0 {
+            drums += &format!(", drums on channel 10 {}", d.percussion);
+        }
+        if d.unmapped > 0 {
+            drums += &format!(", no drum for it {}", d.unmapped);
+        }
         line(format!(
-            "dropped                {} (channel {}, range {}, power budget {}, too fast {}{too_soft}, cancelled {}, stopped {})",
+            "dropped                {} (channel {}{drums}, range {}, power budget {}, too fast {}{too_soft}, cancelled {}, stopped {})",
             d.total(),
             d.channel,
             d.range,

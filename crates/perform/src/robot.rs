@@ -236,7 +236,7 @@ impl<B: Boards> LocalRobot<B> {
 
     /// Whether each key is down now.
     pub fn keys_down(&self) -> Vec<bool> {
-        let keys = self.interp.config().range.keys();
+        let keys = self.interp.config().keys();
         (0..keys).map(|k| self.interp.is_down(k as u8)).collect()
     }
 

@@ -25,6 +25,7 @@ pub(crate) fn config_error(e: ConfigError) -> RobotError {
         ConfigError::NoKeysAllowed => "guard.max_keys_down".to_string(),
         ConfigError::BadDuty | ConfigError::DutyUnsupported => "guard.duty_max_on".to_string(),
         ConfigError::Dynamics(d) => dynamics_field(d),
+        ConfigError::Strike(_) => "strike".to_string(),
     };
     RobotError::field(field, e.to_string())
 }
@@ -58,6 +59,8 @@ struct File {
     pwm: Pwm,
     #[serde(default)]
     dynamics: DynamicsFile,
+    #[serde(default)]
+    strike: Vec<crate::strike::StrikeFile>,
 }
 
 #[derive(Deserialize)]
@@ -111,6 +114,7 @@ struct KeyTouch {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, default)]
 struct Keys {
+    enabled: bool,
     low: i64,
     high: i64,
     out_of_range: Policy,
@@ -131,10 +135,11 @@ enum OverlapWord {
 impl Default for Keys {
     fn default() -> Self {
         Self {
+            enabled: true,
             low: 36,
             high: 96,
             out_of_range: Policy::Fold,
-            channels: toml::Value::String("all".into()),
+            channels: toml::Value::String("melodic".into()),
             sustain: false,
             overlap: OverlapWord::Restrike,
         }
@@ -143,7 +148,7 @@ impl Default for Keys {
 
 #[derive(Deserialize, Clone, Copy)]
 #[serde(rename_all = "lowercase")]
-enum Policy {
+pub(crate) enum Policy {
     Fold,
     Drop,
 }
@@ -229,6 +234,7 @@ struct Guard {
     late_limit: String,
     duty_window: String,
     duty_max_on: String,
+    max_pulse: String,
 }
 
 impl Default for Guard {
@@ -243,12 +249,13 @@ impl Default for Guard {
             late_limit: "30ms".into(),
             duty_window: "60s".into(),
             duty_max_on: "30s".into(),
+            max_pulse: "100ms".into(),
         }
     }
 }
 
 /// An integer field that must lie in `lo..=hi`; `what` says what the number is.
-fn int(field: &str, value: i64, lo: u8, hi: u8, what: &str) -> Result<u8, RobotError> {
+pub(crate) fn int(field: &str, value: i64, lo: u8, hi: u8, what: &str) -> Result<u8, RobotError> {
     if (i64::from(lo)..=i64::from(hi)).contains(&value) {
         Ok(value as u8)
     } else {
@@ -259,17 +266,22 @@ fn int(field: &str, value: i64, lo: u8, hi: u8, what: &str) -> Result<u8, RobotE
     }
 }
 
-/// What `keys.channels` accepts.
-const CHANNELS_HELP: &str =
-    "write \"all\" or a list of channels as people count them, 1..=16, such as [1, 2, 10]";
+/// What a `channels` field accepts.
+const CHANNELS_HELP: &str = "write \"all\", \"melodic\" (every channel but 10, General MIDI's \
+     drums) or a list of channels as people count them, 1..=16, such as [1, 2, 10]";
 
-/// Reads `keys.channels`: `"all"` or a non-empty list of channels 1..=16.
-fn channels(value: &toml::Value) -> Result<ChannelMask, RobotError> {
-    const FIELD: &str = "keys.channels";
+/// Every channel but 10 (General MIDI's percussion).
+pub const MELODIC: ChannelMask = ChannelMask(!(1 << 9));
+
+/// Reads a `channels` field (`FIELD`): `"all"`, `"melodic"` or a non-empty list of channels
+/// 1..=16.
+pub(crate) fn channels(value: &toml::Value, field: &str) -> Result<ChannelMask, RobotError> {
+    let field = |suffix: &str| format!("{field}{suffix}");
     match value {
         toml::Value::String(s) if s == "all" => Ok(ChannelMask::ALL),
+        toml::Value::String(s) if s == "melodic" => Ok(MELODIC),
         toml::Value::Array(list) if list.is_empty() => Err(RobotError::field(
-            FIELD,
+            field(""),
             format!("[] listens to no channel at all; {CHANNELS_HELP}"),
         )),
         toml::Value::Array(list) => {
@@ -281,7 +293,7 @@ fn channels(value: &toml::Value) -> Result<ChannelMask, RobotError> {
                     .and_then(|c| Channel::new(c as u8 - 1))
                     .ok_or_else(|| {
                         RobotError::field(
-                            format!("{FIELD}[{i}]"),
+                            field(&format!("[{i}]")),
                             format!("{item} is not a channel; {CHANNELS_HELP}"),
                         )
                     })?;
@@ -290,7 +302,7 @@ fn channels(value: &toml::Value) -> Result<ChannelMask, RobotError> {
             Ok(mask)
         }
         other => Err(RobotError::field(
-            FIELD,
+            field(""),
             format!("{other} is not a channel list; {CHANNELS_HELP}"),
         )),
     }
@@ -327,7 +339,7 @@ fn clock(text: &str) -> Result<BusClock, RobotError> {
 }
 
 /// A duration that must be given (not "off").
-fn delay(field: &str, text: &str) -> Result<Duration, RobotError> {
+pub(crate) fn delay(field: &str, text: &str) -> Result<Duration, RobotError> {
     duration(field, text)?
         .ok_or_else(|| RobotError::field(field, "\"off\": give a duration such as \"15ms\""))
 }
@@ -442,7 +454,18 @@ fn guard(g: &Guard) -> Result<GuardConfig, RobotError> {
         }
         _ => None,
     };
+    let max_pulse = delay("guard.max_pulse", &g.max_pulse)?;
+    if max_pulse == Duration::ZERO || max_pulse > orch_core::strike::MAX_PULSE {
+        return Err(RobotError::field(
+            "guard.max_pulse",
+            format!(
+                "{:?}: a strike's pulse limit is above 0 and at most 250ms",
+                g.max_pulse
+            ),
+        ));
+    }
     Ok(GuardConfig {
+        max_pulse,
         enabled: g.enabled,
         max_hold,
         max_keys_down,
@@ -552,16 +575,29 @@ impl File {
                 format!("{} is above keys.high = {}", k.low, k.high),
             )
         })?;
-        let channels = channels(&k.channels)?;
+        let channels = channels(&k.channels, "keys.channels")?;
         let (layout, kinds) = boards(self.boards.as_deref())?;
-        if layout.keys() != range.keys() {
+        let strikes = crate::strike::read(&self.strike, k.enabled, range.keys())?;
+        if !k.enabled && self.strike.is_empty() {
+            return Err(RobotError::field(
+                "keys.enabled",
+                "false, and the robot has no [[strike]] group: it would play nothing",
+            ));
+        }
+        let keyboard_keys = if k.enabled { range.keys() } else { 0 };
+        let outputs = keyboard_keys + strikes.strikes.outputs();
+        if layout.keys() != outputs {
+            let what = if self.strike.is_empty() {
+                format!("keys.low..=keys.high has {}", range.keys())
+            } else {
+                format!(
+                    "the keyboard has {keyboard_keys} keys and the strike groups {} outputs",
+                    strikes.strikes.outputs()
+                )
+            };
             return Err(RobotError::field(
                 "boards",
-                format!(
-                    "the boards drive {} keys in all, but keys.low..=keys.high has {}",
-                    layout.keys(),
-                    range.keys()
-                ),
+                format!("the boards drive {} keys in all, but {what}", layout.keys()),
             ));
         }
         let guard = guard(&self.guard)?;
@@ -582,15 +618,27 @@ impl File {
             },
             guard,
             dynamics,
+            strikes: strikes.strikes,
         };
-        config.validate(MAX_KEYS).map_err(config_error)?;
+        let mut groups = Vec::new();
+        if k.enabled {
+            groups.push(crate::Group::keyboard(range, channels));
+        }
+        groups.extend(strikes.groups);
+        config
+            .validate(MAX_KEYS)
+            .map_err(|e| crate::strike::named(e, &groups).unwrap_or_else(|| config_error(e)))?;
         Ok(Robot {
             config,
             boards: kinds.len(),
             kinds,
             pwm_hz,
             clock: clock(&self.bus.clock)?,
-            mechanics: mechanics(&self.mechanics, range)?,
+            mechanics: crate::strike::with_outputs(
+                mechanics(&self.mechanics, range)?,
+                &strikes.mechanics,
+            ),
+            groups,
         })
     }
 }
@@ -708,7 +756,7 @@ fn dynamics(
     }
     // Keys on on/off boards play at full power whatever the velocity.
     for (key, t) in keys.iter_mut().enumerate() {
-        let pwm = (key < range.keys())
+        let pwm = (key < layout.keys())
             .then(|| layout.finger(key as u8))
             .flatten()
             .is_some_and(|f| kinds.get(f.board as usize) == Some(&BoardKind::Pwm));
@@ -821,7 +869,9 @@ mod tests {
         assert_eq!(r.boards, 4);
         assert_eq!(r.config.range, t.range);
         assert_eq!(r.config.guard, t.guard);
-        assert_eq!(r.config.channels, t.channels);
+        // The thesis's robot with one change: a keyboard leaves channel 10 (drums) alone.
+        assert_eq!(r.config.channels, MELODIC);
+        assert_eq!(t.channels, ChannelMask::ALL);
         assert_eq!(&r.config.layout.boards[..4], &t.layout.boards[..]);
         assert_eq!(Robot::from_toml("").unwrap().config, r.config);
         assert_eq!(r.clock, BusClock::FAST);

@@ -24,8 +24,14 @@ use orch_sim::{BusClock, MechanicsConfig, SimConfig};
 
 mod error;
 mod file;
+mod group;
+mod instrument;
+mod strike;
 
 pub use error::RobotError;
+pub use file::MELODIC;
+pub use group::{gm_drum_name, note_name, Group, GroupKind};
+pub use instrument::{instrument_toml, Instrument};
 
 /// The most boards a host configuration may have.
 pub const MAX_BOARDS: usize = 16;
@@ -63,6 +69,8 @@ pub struct Robot {
     pub clock: BusClock,
     /// How the keys move: press and release delays, shortest pulse that sounds.
     pub mechanics: MechanicsConfig,
+    /// Its instruments, in key order: the keyboard (if it has one), then the strike groups.
+    pub groups: Vec<Group>,
 }
 
 impl Robot {
@@ -118,6 +126,11 @@ impl Robot {
         self.kinds.contains(&BoardKind::Pwm)
     }
 
+    /// The group `key` belongs to.
+    pub fn group_of(&self, key: u8) -> Option<&Group> {
+        self.groups.iter().find(|g| g.keys().contains(&key))
+    }
+
     /// An interpreter for this robot.
     ///
     /// A robot read by [`Robot::from_toml`] always has one; a robot whose fields were changed
@@ -132,13 +145,19 @@ pub const DEFAULT_TOML: &str = r#"# orch robot configuration (robot.toml)
 # Every field is optional; a missing one takes the value shown here.
 
 [keys]
+# Whether the robot has a keyboard. false: only its [[strike]] groups play.
+enabled = true
 # The notes the robot has keys for, as MIDI note numbers (60 is middle C).
 low = 36                  # C2
 high = 96                 # C7: 61 keys
 # Notes outside low..=high: "fold" moves them by octaves into range; "drop" skips them.
 out_of_range = "fold"
-# Channels listened to, as people count them (1..=16), or "all".
-channels = "all"
+# Channels listened to, as people count them (1..=16, such as [1, 2]), "all", or "melodic":
+# every channel but 10, which General MIDI gives to drums. A keyboard leaves drum notes alone
+# by default (they are not pitches: GM note 42 is a closed hi-hat, not F#2); they are dropped
+# as "percussion", and a [[strike]] drum group would play them (`orch config --instrument
+# drums`).
+channels = "melodic"
 # Let the sustain pedal (CC 64) hold released keys down. Off by default: a held solenoid heats up.
 sustain = false
 # A second note on a key that is down (the same note on another channel, a note folded onto
@@ -212,6 +231,7 @@ watchdog = "4s"           # release every key after this long without a byte (mo
 late_limit = "30ms"       # a re-strike that would sound later than this is dropped (too fast)
 duty_window = "60s"       # the duty limit: a key may be energised at most duty_max_on
 duty_max_on = "30s"       #   in any duty_window ("off": no duty limit)
+max_pulse = "100ms"       # the longest a strike's pulse may last ([[strike]] groups; at most 250ms)
 # With PCA9685 boards, the power budget and the duty limit count energy: max_keys_down is a
 # current (keys at full power; a key holding at 35 % counts 0.35), and a key heats by its duty.
 

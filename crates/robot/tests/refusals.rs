@@ -160,3 +160,67 @@ fn bus_clock_is_read_in_hz_khz_and_mhz() {
         }
     }
 }
+
+/// A drum kit of two outputs on one board, with `extra` added to its first output's table.
+fn kit(extra: &str) -> String {
+    format!(
+        "[keys]\nenabled = false\n[[boards]]\naddress = 0x21\nkeys = 2\n[[strike]]\nchannels = [10]\n\
+         [[strike.output]]\nname = \"kick\"\nnotes = [35, 36]\n{extra}\n[[strike.output]]\nname = \"snare\"\nnotes = [38]\n"
+    )
+}
+
+#[test]
+fn strike_groups_that_cannot_play_are_refused_naming_the_field() {
+    assert!(Robot::from_toml(&kit("")).is_ok());
+    let cases = [
+        (
+            kit("pulse_loud = \"5ms\""),
+            "strike[0].output[0].pulse_loud",
+        ),
+        (kit("rebound = \"10ms\""), "strike[0].output[0].rebound"),
+        (
+            kit("pulse_soft = \"2ms\""),
+            "strike[0].output[0].pulse_soft",
+        ),
+        (
+            kit("notes = [38]").replace("notes = [35, 36]\n", ""),
+            "strike[0].output[1].notes[0]",
+        ),
+        (
+            kit("pulse_loud = \"150ms\"\nrebound = \"200ms\""),
+            "strike[0].output[0].pulse_loud",
+        ),
+        (kit("").replace("keys = 2", "keys = 3"), "boards"),
+        (
+            kit("").replace("channels = [10]", "channels = [17]"),
+            "strike[0].channels[0]",
+        ),
+        (
+            kit("").replace("[[strike]]", "[[strike]]\nlow = 79"),
+            "strike[0].low",
+        ),
+        ("[keys]\nenabled = false\n".to_string(), "keys.enabled"),
+        (
+            kit("").replace("[keys]", "[guard]\nmax_pulse = \"1s\"\n[keys]"),
+            "guard.max_pulse",
+        ),
+    ];
+    for (text, field) in cases {
+        let e = Robot::from_toml(&text).expect_err(&text);
+        assert_eq!(e.field_name(), Some(field), "{e:#}\n{text}");
+    }
+}
+
+#[test]
+fn a_piano_with_a_drum_kit_on_channel_10_numbers_the_kits_outputs_after_the_keys() {
+    let text = "[keys]\nlow = 48\nhigh = 59\n[[boards]]\naddress = 0x21\nkeys = 14\n\
+                [[strike]]\nname = \"drums\"\nchannels = [10]\n[[strike.output]]\nname = \"kick\"\nnotes = [36]\n\
+                [[strike.output]]\nname = \"snare\"\nnotes = [38]\n";
+    let robot = Robot::from_toml(text).unwrap();
+    assert_eq!(robot.groups.len(), 2);
+    assert_eq!(robot.group_of(12).unwrap().output_name(12), Some("kick"));
+    assert_eq!(robot.group_of(3).unwrap().name, "keyboard");
+    // The kit's beaters have a drum's mechanics; the keys keep theirs.
+    assert_eq!(robot.mechanics.for_key(12).press_delay.as_micros(), 10_000);
+    assert_eq!(robot.mechanics.for_key(3).press_delay.as_micros(), 15_000);
+}

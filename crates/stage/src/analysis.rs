@@ -18,7 +18,8 @@ pub struct Wrong {
     pub bar: u32,
     /// Its beat in the bar, counted from 1.
     pub beat: u32,
-    /// The note's name as written ("C4" for 60).
+    /// The note's name as written ("C4" for 60); on channel 10 its General MIDI drum's
+    /// ("Closed Hi-Hat" for 42).
     pub note: String,
     /// 1..=16, as people count channels.
     pub channel: u8,
@@ -94,7 +95,10 @@ pub fn went_wrong(song: &Song, played: &Played, tempo: Tempo) -> Vec<Wrong> {
             Wrong {
                 bar,
                 beat,
-                note: orch_roll::note_name(r.note),
+                note: match orch_robot::gm_drum_name(r.note).filter(|_| r.channel == 9) {
+                    Some(drum) => drum.to_string(),
+                    None => orch_roll::note_name(r.note),
+                },
                 channel: r.channel + 1,
                 outcome: match loudness {
                     Some(true) => "louder",

@@ -36,7 +36,7 @@ pub fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
     ));
     let d = &o.dropped;
     let budget = robot.config.guard.max_keys_down;
-    let counted: [(u64, String); 14] = [
+    let counted: [(u64, String); 16] = [
         (
             o.joined,
             "notes land on a key already down for another note and make no sound of their own"
@@ -53,6 +53,16 @@ pub fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
         (
             d.channel,
             "notes are on channels the robot does not listen to".into(),
+        ),
+        (
+            d.percussion,
+            "notes are drums on channel 10 (General MIDI's percussion): the keyboard leaves them \
+             alone; a drum group would play them (`orch config --instrument drums`)"
+                .into(),
+        ),
+        (
+            d.unmapped,
+            "notes are drums the kit has no output for and will not be played".into(),
         ),
         (
             d.power,
@@ -116,10 +126,17 @@ pub fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
         .filter(|e| e.bytes.note_on().is_some_and(|(ch, _, _)| ch == 9))
         .count();
     let ten = orch_core::Channel::new(9).expect("channel 10");
-    if drums > 0 && robot.config.channels.contains(ten) {
+    let kit_listens = robot
+        .config
+        .strikes
+        .groups()
+        .iter()
+        .any(|g| g.channels.contains(ten));
+    let keyboard = robot.config.keyboard_keys() > 0;
+    if drums > 0 && keyboard && robot.config.channels.contains(ten) && !kit_listens {
         f.push(format!(
             "{drums} notes are drums on channel 10: a piano plays them as pitches; \
-             consider `channels` in robot.toml"
+             consider `channels = \"melodic\"` in robot.toml"
         ));
     }
     if f.len() == 1 {

@@ -437,7 +437,7 @@ impl LiveRobot {
             self.interp.tick(Instant::from_micros(now));
             self.flush(now, None)?;
         }
-        let keys = self.interp.config().range.keys();
+        let keys = self.interp.config().keys();
         let all_up = (0..keys).all(|k| self.interp.key_phase(k as u8) == KeyPhase::Up);
         if !all_up || !self.framer.idle() {
             return Ok(false);
@@ -528,7 +528,7 @@ impl LiveRobot {
 
     /// Whether each key is down now.
     pub fn keys_down(&self) -> Vec<bool> {
-        let keys = self.interp.config().range.keys();
+        let keys = self.interp.config().keys();
         (0..keys).map(|k| self.interp.is_down(k as u8)).collect()
     }
 

@@ -585,6 +585,8 @@ pub fn guard() -> impl Strategy<Value = GuardConfig> {
                         max_on: Duration::from_micros((window * 10 * percent).max(1)),
                     },
                 ),
+                #[cfg(feature = "strike")]
+                max_pulse: GuardConfig::DEFAULT.max_pulse,
             },
         )
 }
