@@ -22,6 +22,9 @@ step "install: Debian packages, the firmware's nightly (firmware/install.sh), ru
 # checks its systemd unit and package.
 bash firmware/install.sh tmux libasound2-dev libclang-dev timgm6mb-soundfont chromium chromium-driver \
     gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user systemd
+# pymidi 0.5.0 (PyPI): the independent RTP-MIDI peer of tests/rtpmidi.rs (it imports six
+# without declaring it).
+python3 -c "import pymidi.server, six" 2>/dev/null || python3 -m pip install -q pymidi==0.5.0 six
 if [ ! -e /dev/snd/seq ]; then
     echo "NOTE: this kernel offers no ALSA sequencer (/dev/snd/seq): the alsa output's real-port test skips (its encoder test runs)"
 fi

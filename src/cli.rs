@@ -161,7 +161,8 @@ pub struct PlayArgs {
     #[arg(long)]
     pub no_view: bool,
     /// Where to play, as many times as there are robots: sim (the default), serial:DEVICE,
-    /// rawmidi:DEVICE, udp:HOST:PORT, i2c:DEVICE or (built with the `alsa` feature)
+    /// rawmidi:DEVICE, udp:HOST:PORT, rtpmidi:HOST:PORT (an RTP-MIDI session orch begins),
+    /// i2c:DEVICE or (built with the `alsa` feature)
     /// alsa:CLIENT:PORT, each optionally followed by :ch=LIST (channels 1-16, e.g. :ch=1 or
     /// :ch=2,4-6) to give it only those channels.
     #[arg(long = "out", value_name = "OUT")]
@@ -265,6 +266,7 @@ pub struct BatonArgs {
 pub struct RunArgs {
     /// Where the MIDI bytes come from: serial:DEVICE (a DIN line, 31250 baud),
     /// rawmidi:DEVICE (or any file or FIFO), udp:PORT (datagrams on loopback), udp:HOST:PORT,
+    /// rtpmidi:[NAME@]PORT (an RTP-MIDI session answered on control port PORT, data PORT+1),
     /// a dash for standard input, or (built with the `alsa` feature) alsa: (a sequencer port
     /// of orch's own to connect to) or alsa:CLIENT:PORT (that source, subscribed). A serial
     /// or raw MIDI device that goes away is opened again when it comes back.

@@ -1,5 +1,6 @@
 //! `orch run --in IN --out OUT`: the thesis's ATmega16 job on a Linux host. Live MIDI bytes
-//! in (a DIN line through a UART, a raw MIDI device, UDP, standard input), orch-core's
+//! in (a DIN line through a UART, a raw MIDI device, UDP, an RTP-MIDI session, standard
+//! input), orch-core's
 //! interpreter and guard, finger boards out (the virtual robot, or PCA9555 and PCA9685 boards
 //! on the host's I2C bus), and the stream passed through to other MIDI outputs (`--thru`).
 //!
@@ -27,7 +28,9 @@ use crate::view::{Scene, View};
 fn say(said: Said, input: &str) {
     match said {
         Said::Counters(_) => eprintln!("orch run: {said}"),
-        Said::Lost(_) | Said::Back => eprintln!("orch: --in {input}: {said}"),
+        Said::Lost(_) | Said::Back | Said::Joined(_) | Said::Left(_) => {
+            eprintln!("orch: --in {input}: {said}")
+        }
         Said::TookOver => eprintln!("orch: {said}"),
         _ => eprintln!("orch: SIGHUP: {said}"),
     }

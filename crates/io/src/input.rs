@@ -2,6 +2,7 @@
 //!
 //! ```text
 //! IN = serial:DEVICE | rawmidi:DEVICE | udp:PORT | udp:HOST:PORT | - | alsa: | alsa:CLIENT:PORT
+//!    | rtpmidi:[NAME@]PORT | rtpmidi:[NAME@]HOST:PORT
 //! ```
 //!
 //! | IN | what |
@@ -11,6 +12,7 @@
 //! | `udp:5004` | datagrams of raw MIDI bytes on the loopback address, port 5004 |
 //! | `udp:0.0.0.0:5004` | the same on every address (or any `HOST:PORT` to bind) |
 //! | `-` | standard input |
+//! | `rtpmidi:5004`, `rtpmidi:piano@5004` | an RTP-MIDI (AppleMIDI) session answered as NAME (default `orch`) on every address: control port 5004, data port 5005 ([`crate::rtp::listen`]); `HOST:PORT` binds one address |
 //! | `alsa:`, `alsa:CLIENT:PORT` | (the `alsa` feature) orch's own ALSA sequencer port, `orch in`, for any client to connect to; given a source, orch subscribes it |
 //!
 //! [`MidiIn::open`] starts a reader thread (at real-time priority where the OS allows it)
@@ -63,8 +65,8 @@ impl fmt::Display for InSpecError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "--in {}: {} (give serial:DEVICE, rawmidi:DEVICE, udp:PORT, udp:HOST:PORT, alsa:, \
-             alsa:CLIENT:PORT or -)",
+            "--in {}: {} (give serial:DEVICE, rawmidi:DEVICE, udp:PORT, udp:HOST:PORT, \
+             rtpmidi:[NAME@]PORT, alsa:, alsa:CLIENT:PORT or -)",
             self.spec, self.reason
         )
     }
@@ -83,6 +85,14 @@ pub enum InTarget {
     Udp(SocketAddr),
     /// Standard input.
     Stdin,
+    /// An RTP-MIDI session answered as `name`, its control port at `addr` (the data port
+    /// after it).
+    RtpMidi {
+        /// The name orch gives itself.
+        name: String,
+        /// The control port's address.
+        addr: SocketAddr,
+    },
     /// An ALSA sequencer port of orch's own, with a source to subscribe to it if given
     /// (`alsa:` or `alsa:CLIENT:PORT`; the `alsa` feature).
     Alsa(Option<String>),
@@ -121,9 +131,31 @@ impl InTarget {
                     .ok_or_else(|| err(format!("`{rest}` is not PORT or HOST:PORT")))
             }
             "alsa" => alsa_input(Some(rest)).map_err(err),
+            "rtpmidi" => rtpmidi_input(rest).map_err(err),
             other => Err(err(format!("unknown input kind `{other}`"))),
         }
     }
+}
+
+/// `rtpmidi:[NAME@]PORT` (every address) or `rtpmidi:[NAME@]HOST:PORT`.
+fn rtpmidi_input(rest: &str) -> Result<InTarget, String> {
+    let (name, at) = match rest.rsplit_once('@') {
+        Some((n, a)) if !n.is_empty() => (n.to_string(), a),
+        Some((_, a)) => (crate::rtp::out::NAME.to_string(), a),
+        None => (crate::rtp::out::NAME.to_string(), rest),
+    };
+    let addr = match at.parse::<u16>() {
+        Ok(port) => SocketAddr::from(([0, 0, 0, 0], port)),
+        Err(_) => at
+            .to_socket_addrs()
+            .ok()
+            .and_then(|mut a| a.next())
+            .ok_or_else(|| format!("`{at}` is not PORT or HOST:PORT"))?,
+    };
+    if addr.port() == u16::MAX {
+        return Err("the data port is the control port + 1: give a port below 65535".into());
+    }
+    Ok(InTarget::RtpMidi { name, addr })
 }
 
 /// `alsa:` and `alsa:SOURCE`: an input with the `alsa` feature, a clear refusal without.
@@ -159,6 +191,11 @@ pub enum InEvent {
     Lost(io::Error),
     /// The device that went away is open again and read.
     Back,
+    /// A network session began (RTP-MIDI): who, for messages.
+    Joined(String),
+    /// The network session ended (the peer's goodbye, or another took its place): every key
+    /// is released, as when a device goes away; another session may begin.
+    Left(String),
 }
 
 /// A reader thread on one input. Dropping it asks the thread to stop (readers that can time
@@ -218,6 +255,17 @@ impl MidiIn {
         target: &InTarget,
         events: Sender<T>,
     ) -> Result<MidiIn, OutError> {
+        let stop = Arc::new(AtomicBool::new(false));
+        if let InTarget::RtpMidi { name, addr } = target {
+            let (label, local, thread) =
+                crate::rtp::listen::start(name, *addr, Arc::clone(&stop), events)?;
+            return Ok(MidiIn {
+                name: label,
+                stop,
+                thread: Some(thread),
+                local: Some(local),
+            });
+        }
         let (name, source, local) = open_source(target)?;
         let reconnects = match (target, &source) {
             (InTarget::Serial(_), _) => true,
@@ -227,7 +275,6 @@ impl MidiIn {
             }
             _ => false,
         };
-        let stop = Arc::new(AtomicBool::new(false));
         let thread = {
             let stop = Arc::clone(&stop);
             let target = target.clone();
@@ -337,6 +384,13 @@ fn open_source(target: &InTarget) -> Result<(String, Source, Option<SocketAddr>)
                 ),
             };
             (name, Source::Alsa(port, Default::default()), None)
+        }
+        InTarget::RtpMidi { addr, .. } => {
+            // Sessions have their own reader threads (MidiIn::open); never a plain source.
+            return Err(OutError::Open {
+                device: format!("rtpmidi:{addr}"),
+                source: io::Error::new(io::ErrorKind::Unsupported, "not a byte source"),
+            });
         }
         #[cfg(not(feature = "alsa"))]
         InTarget::Alsa(_) => {

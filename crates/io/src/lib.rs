@@ -11,7 +11,10 @@
 //!   on `orch-boards`' PCA9555 driver ([`BoardsOut`]), with retries, lost boards played
 //!   around and re-initialised when they answer again ([`ResilientBoards`]).
 //! - MIDI inputs for `orch run --in` ([`input`]): a UART at 31 250 baud, a raw MIDI device
-//!   or file, UDP datagrams, standard input; each read stamped with the host's monotonic clock.
+//!   or file, UDP datagrams, an RTP-MIDI session, standard input; each read stamped with the
+//!   host's monotonic clock.
+//! - RTP-MIDI with AppleMIDI sessions ([`rtp`]), in (`--in rtpmidi:PORT`) and out
+//!   (`--out rtpmidi:HOST:PORT`), with the recovery journal's chapters N and C.
 //! - `--out` specifications ([`spec`]): `serial:/dev/ttyUSB0`, `udp:HOST:PORT:ch=2`, …
 //!
 //! Every output lets go of every key when the performance ends, when it is stopped and when
@@ -29,7 +32,7 @@
 //! ## Cargo features
 //!
 //! - `alsa` (off by default): `alsa:CLIENT:PORT` outputs and `alsa:` / `alsa:CLIENT:PORT`
-//!   inputs, ALSA sequencer ports ([`alsa_seq`]). It links alsa-lib (`libasound2-dev` to
+//!   inputs, ALSA sequencer ports (the `alsa_seq` module). It links alsa-lib (`libasound2-dev` to
 //!   build).
 //!
 //! Without it no system library is needed: serial ports through `serialport` without
@@ -42,6 +45,7 @@ pub mod alsa_seq;
 pub mod boards;
 pub mod input;
 pub mod midi;
+pub mod rtp;
 pub mod spec;
 
 use std::fmt;
@@ -49,6 +53,7 @@ use std::fmt;
 pub use boards::{open_i2c, BoardStats, BoardsOut, LinuxI2c, ResilientBoards, TimedBus};
 pub use input::{InEvent, InSpecError, InTarget, MidiIn, RECONNECT_EVERY};
 pub use midi::{MidiPort, Port, PortStats, RawMidiOut, SerialOut, UdpOut};
+pub use rtp::out::RtpMidiOut;
 pub use spec::{Channels, OutSpec, SpecError, Target};
 
 use orch_perform::{MidiOut, MAX_BOARDS};
@@ -137,6 +142,8 @@ pub enum Output {
     RawMidi(RawMidiOut),
     /// UDP datagrams.
     Udp(UdpOut),
+    /// An RTP-MIDI session orch began.
+    RtpMidi(Box<RtpMidiOut>),
     /// An ALSA sequencer port.
     #[cfg(feature = "alsa")]
     Alsa(alsa_seq::AlsaOut),
@@ -160,6 +167,7 @@ impl Output {
             Target::Serial(p) => Output::Serial(SerialOut::open(&path(p))?),
             Target::RawMidi(p) => Output::RawMidi(RawMidiOut::open(&path(p))?),
             Target::Udp(a) => Output::Udp(UdpOut::open(a)?),
+            Target::RtpMidi(a) => Output::RtpMidi(Box::new(RtpMidiOut::open(a)?)),
             #[cfg(feature = "alsa")]
             Target::Alsa(a) => Output::Alsa(alsa_seq::AlsaOut::open(a)?),
             Target::I2c(p) => Output::I2c(Box::new(BoardsOut::with_kinds(
@@ -177,6 +185,7 @@ impl Output {
             Output::Serial(p) => OutStats::Port(p.stats()),
             Output::RawMidi(p) => OutStats::Port(p.stats()),
             Output::Udp(p) => OutStats::Port(p.stats()),
+            Output::RtpMidi(p) => OutStats::Port(p.stats()),
             #[cfg(feature = "alsa")]
             Output::Alsa(p) => OutStats::Port(p.stats()),
             Output::I2c(b) => OutStats::Boards(b.boards().stats()),
@@ -201,6 +210,7 @@ impl MidiOut for Output {
             Output::Serial(p) => p.send(t_us, bytes).map_err(|e| match e {}),
             Output::RawMidi(p) => p.send(t_us, bytes).map_err(|e| match e {}),
             Output::Udp(p) => p.send(t_us, bytes).map_err(|e| match e {}),
+            Output::RtpMidi(p) => p.send(t_us, bytes).map_err(|e| match e {}),
             #[cfg(feature = "alsa")]
             Output::Alsa(p) => p.send(t_us, bytes).map_err(|e| match e {}),
             Output::I2c(b) => b.send(t_us, bytes),
@@ -226,6 +236,7 @@ impl MidiOut for Output {
             Output::Serial(p) => p.finish(t_us).map_err(|e| match e {}),
             Output::RawMidi(p) => p.finish(t_us).map_err(|e| match e {}),
             Output::Udp(p) => p.finish(t_us).map_err(|e| match e {}),
+            Output::RtpMidi(p) => p.finish(t_us).map_err(|e| match e {}),
             #[cfg(feature = "alsa")]
             Output::Alsa(p) => p.finish(t_us).map_err(|e| match e {}),
             Output::I2c(b) => b.finish(t_us),

@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! OUT      = KIND [":" TARGET] [":ch=" CHANNELS]
-//! KIND     = sim | serial | rawmidi | udp | i2c | alsa
+//! KIND     = sim | serial | rawmidi | udp | rtpmidi | i2c | alsa
 //! CHANNELS = a comma-separated list of channels 1..=16 and ranges: 1   2,3   1-4,10
 //! ```
 //!
@@ -12,6 +12,7 @@
 //! | `serial:/dev/ttyUSB0` | a DIN MIDI line through a UART at 31 250 baud, 8N1 |
 //! | `rawmidi:/dev/snd/midiC1D0` | the kernel's raw MIDI device, written as a file |
 //! | `udp:HOST:PORT` | raw MIDI bytes, one whole message per datagram |
+//! | `rtpmidi:HOST:PORT` | an RTP-MIDI (AppleMIDI) session orch begins with the peer whose control port is PORT, with a recovery journal ([`crate::rtp::out`]) |
 //! | `i2c:/dev/i2c-1` | PCA9555 finger boards on the host's I2C bus, driven by this host |
 //! | `alsa:128:0` | an ALSA sequencer port (with the `alsa` feature) |
 //!
@@ -35,7 +36,8 @@ impl fmt::Display for SpecError {
         write!(
             f,
             "--out {}: {} (give sim, serial:DEVICE, rawmidi:DEVICE, udp:HOST:PORT, \
-             i2c:DEVICE or alsa:CLIENT:PORT, optionally followed by :ch=1,2-4)",
+             rtpmidi:HOST:PORT, i2c:DEVICE or alsa:CLIENT:PORT, optionally followed by \
+             :ch=1,2-4)",
             self.spec, self.reason
         )
     }
@@ -54,6 +56,8 @@ pub enum Target {
     RawMidi(PathBuf),
     /// A UDP destination, `HOST:PORT`.
     Udp(String),
+    /// An RTP-MIDI peer's control port, `HOST:PORT`.
+    RtpMidi(String),
     /// An I2C bus with finger boards on it.
     I2c(PathBuf),
     /// An ALSA sequencer port, `CLIENT:PORT` (numbers or the client's name).
@@ -170,11 +174,19 @@ impl OutSpec {
             "serial" => Target::Serial(need("a device")?.into()),
             "rawmidi" => Target::RawMidi(need("a device")?.into()),
             "i2c" => Target::I2c(need("a device")?.into()),
-            "udp" => {
+            "udp" | "rtpmidi" => {
                 let t = need("HOST:PORT")?;
-                match t.rsplit_once(':') {
-                    Some((host, port)) if !host.is_empty() && port.parse::<u16>().is_ok() => {
-                        Target::Udp(t.to_string())
+                match t.rsplit_once(':').map(|(h, p)| (h, p.parse::<u16>())) {
+                    Some((host, Ok(port))) if !host.is_empty() => {
+                        if kind == "udp" {
+                            Target::Udp(t.to_string())
+                        } else if port == u16::MAX {
+                            return Err(err("the data port is PORT + 1: give a port below \
+                                 65535"
+                                .into()));
+                        } else {
+                            Target::RtpMidi(t.to_string())
+                        }
                     }
                     _ => return Err(err(format!("`{t}` is not HOST:PORT"))),
                 }
@@ -234,6 +246,12 @@ mod tests {
             OutSpec::parse("udp:[::1]:9000").unwrap().channels,
             Channels::ALL
         );
+        assert_eq!(
+            OutSpec::parse("rtpmidi:192.168.1.5:5004:ch=1")
+                .unwrap()
+                .target,
+            Target::RtpMidi("192.168.1.5:5004".into())
+        );
     }
 
     #[test]
@@ -243,6 +261,8 @@ mod tests {
             ("serial:", "needs a device"),
             ("udp:localhost", "not HOST:PORT"),
             ("udp:localhost:99999", "not HOST:PORT"),
+            ("rtpmidi:localhost", "not HOST:PORT"),
+            ("rtpmidi:localhost:65535", "below 65535"),
             ("tcp:x", "unknown output kind"),
             ("serial:/dev/x:ch=0", "not 1 to 16"),
             ("serial:/dev/x:ch=17", "not 1 to 16"),

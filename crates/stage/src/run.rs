@@ -41,6 +41,10 @@ pub enum Said {
     Lost(std::io::Error),
     /// The input's device is back.
     Back,
+    /// A network session began (RTP-MIDI): who.
+    Joined(String),
+    /// The network session ended (every key released): who, and why.
+    Left(String),
     /// The counters, asked for or (verbose) once a second while bytes come.
     Counters(String),
     /// There is no robot file to read again: the thesis's robot stays.
@@ -66,6 +70,8 @@ impl std::fmt::Display for Said {
                 orch_io::RECONNECT_EVERY.as_millis()
             ),
             Said::Back => f.write_str("the device is back"),
+            Said::Joined(who) => write!(f, "session with {who} open"),
+            Said::Left(who) => write!(f, "session ended: {who}; every key released"),
             Said::Counters(c) => f.write_str(c),
             Said::NoFile => f.write_str("no --robot file to read again; the thesis's robot stays"),
             Said::Refused(path, e) => write!(
@@ -185,6 +191,14 @@ impl Loop<'_> {
                 Ok(Event::In(InEvent::Back)) => {
                     (self.say)(Said::Back);
                     Ok(())
+                }
+                Ok(Event::In(InEvent::Joined(who))) => {
+                    (self.say)(Said::Joined(who));
+                    Ok(())
+                }
+                Ok(Event::In(InEvent::Left(who))) => {
+                    (self.say)(Said::Left(who));
+                    live.line_lost()
                 }
                 Ok(Event::In(InEvent::Failed(e))) => return End::InputFailed(e),
                 Ok(Event::Counters) => {
