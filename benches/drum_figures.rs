@@ -28,7 +28,7 @@ fn main() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/midi");
     let manifest = std::fs::read_to_string(dir.join("MANIFEST.tsv")).expect("the corpus");
     let (mut onsets, mut outcomes) = (Vec::new(), HashMap::<String, u64>::new());
-    let (mut closest, mut files) = (u64::MAX, 0);
+    let (mut closest, mut files) = (HashMap::<u8, u64>::new(), 0);
     let (mut pulses_us, mut held_us) = (0u64, 0u64);
     for line in manifest.lines().skip(1) {
         let cols: Vec<&str> = line.split('\t').collect();
@@ -65,7 +65,8 @@ fn main() {
             let (high, low) = (p.pin_high.as_nanos() / 1000, p.pin_low.as_nanos() / 1000);
             pulses_us += low - high;
             if let Some(before) = last.insert(p.key, high) {
-                closest = closest.min(high - before);
+                let c = closest.entry(p.key).or_insert(u64::MAX);
+                *c = (*c).min(high - before);
             }
         }
         held_us += held_lengths(&song, &robot);
@@ -88,15 +89,18 @@ fn main() {
     for (word, n) in list {
         println!("  {word}: {n}");
     }
-    let rebound = (0..robot.config.keys() as u8)
-        .map(|k| robot.config.strikes.pulse(k).rebound.as_micros())
-        .min()
-        .unwrap_or(0);
-    println!(
-        "closest two strikes of one beater: {:.1} ms (its rebound, the limit: at least {:.1} ms)",
-        closest as f64 / 1000.0,
-        rebound as f64 / 1000.0
-    );
+    // The beater that came nearest its limit: the least margin over its rebound.
+    let kit = &robot.groups[0];
+    if let Some((key, gap)) = closest.iter().min_by_key(|(k, gap)| {
+        **gap as i64 - i64::from(robot.config.strikes.pulse(**k).rebound.as_micros())
+    }) {
+        println!(
+            "closest two strikes of one beater: {:.1} ms ({}, whose rebound, the limit, is {:.1} ms)",
+            *gap as f64 / 1000.0,
+            kit.output_name(*key).unwrap_or("?"),
+            robot.config.strikes.pulse(*key).rebound.as_micros() as f64 / 1000.0
+        );
+    }
     println!(
         "solenoid-on time: pulses {:.1} s against {:.1} s holding each note for its length ({:.1} %)",
         pulses_us as f64 / 1e6,
