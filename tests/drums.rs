@@ -270,6 +270,34 @@ fn analyze_names_the_drum_notes_a_piano_leaves_alone_and_the_drums_a_kit_lacks()
     assert!(unmapped.iter().all(|n| !pitch(n)), "{unmapped:?}");
 }
 
+/// `orch analyze --svg` on the kit: every drum is drawn on the row of the note written (a
+/// kit's output plays several notes: no dashed "fold" line to another row), and on the
+/// glockenspiel a folded note's line goes to its bar's row.
+#[test]
+fn the_roll_draws_drums_on_their_own_rows_and_folded_bars_on_the_bars() {
+    let dir = scratch("roll");
+    for (instrument, file, folds) in [
+        ("drums", "mma-lib-rock1.mid", false),
+        ("glockenspiel", "bach-invention-01.mid", true),
+    ] {
+        let robot = dir.join(format!("{instrument}.toml"));
+        std::fs::write(&robot, config(&["--instrument", instrument])).unwrap();
+        let svg = dir.join("roll.svg");
+        let out = orch()
+            .args(["analyze", "--robot"])
+            .arg(&robot)
+            .arg("--svg")
+            .arg(&svg)
+            .arg(shared_midi().join(file))
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{instrument}");
+        let text = std::fs::read_to_string(&svg).unwrap();
+        assert!(text.contains("class=\"note on_time"), "{instrument}: strikes drawn");
+        assert_eq!(text.contains("class=\"fold\""), folds, "{instrument}");
+    }
+}
+
 #[test]
 fn every_instrument_is_printed_and_an_unknown_one_is_refused() {
     for name in ["piano", "drums", "glockenspiel"] {

@@ -49,6 +49,36 @@ impl fmt::Display for BuildError {
 
 impl std::error::Error for BuildError {}
 
+/// Where each of the robot's outputs is drawn: the pitch rows of its keys.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Rows {
+    /// The robot's lowest and highest row, as MIDI notes (shaded as its keys).
+    pub keys: (u8, u8),
+    /// Each output's row, by output (key) index: `Some(note)` for a key or a bar of its
+    /// own pitch, `None` for a drum (a kit's output plays several notes: a strike is drawn on
+    /// the row of the note written). Outputs past the list are keys from `keys.0` up.
+    pub note_of: Vec<Option<u8>>,
+}
+
+impl Rows {
+    /// A keyboard of the MIDI notes `keys.0..=keys.1`: output `k` is note `keys.0 + k`.
+    pub fn keyboard(keys: (u8, u8)) -> Self {
+        Self {
+            keys,
+            note_of: Vec::new(),
+        }
+    }
+
+    /// The row of a note written `written` that landed on output `key`.
+    pub fn landed(&self, key: u8, written: u8) -> u8 {
+        match self.note_of.get(key as usize) {
+            Some(Some(note)) => *note,
+            Some(None) => written,
+            None => self.keys.0.saturating_add(key),
+        }
+    }
+}
+
 /// The roll of `played`, a performance of `song` at tempo factor `tempo` (2: twice as
 /// fast) on a robot whose keys are the MIDI notes `keys.0..=keys.1`, titled `title`.
 pub fn roll(
@@ -58,6 +88,19 @@ pub fn roll(
     tempo: f64,
     title: &str,
 ) -> Result<Roll, BuildError> {
+    roll_on(song, played, &Rows::keyboard(keys), tempo, title)
+}
+
+/// [`roll`] on a robot whose outputs are drawn on `rows` (strike groups beside or instead of
+/// a keyboard).
+pub fn roll_on(
+    song: &Song,
+    played: &Played,
+    rows: &Rows,
+    tempo: f64,
+    title: &str,
+) -> Result<Roll, BuildError> {
+    let keys = rows.keys;
     if played.jumps > 0 || played.replayed > 0 {
         return Err(BuildError::Jumped);
     }
@@ -112,7 +155,7 @@ pub fn roll(
             note: line.note,
             channel: line.channel,
             velocity: line.velocity,
-            landed: line.key.map(|k| keys.0.saturating_add(k)),
+            landed: line.key.map(|k| rows.landed(k, line.note)),
             outcome,
             strike,
         });

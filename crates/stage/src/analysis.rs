@@ -128,8 +128,27 @@ pub fn roll_svg(
     tempo: Tempo,
     title: &str,
 ) -> Result<String, orch_roll::build::BuildError> {
-    let range = robot.config.range;
-    let keys = (range.low().get(), range.high().get());
-    let roll = orch_roll::build::roll(song, played, keys, tempo.get(), title)?;
+    let roll = orch_roll::build::roll_on(song, played, &rows(robot), tempo.get(), title)?;
     Ok(orch_roll::render(&roll, &orch_roll::Options::default()))
+}
+
+/// Where the roll draws each of `robot`'s outputs: keys and bars on their pitch's row, a kit's
+/// drums on the row of the note written; the rows shaded as the robot's span every note it
+/// plays.
+fn rows(robot: &Robot) -> orch_roll::build::Rows {
+    let mut note_of = Vec::new();
+    let (mut low, mut high) = (u8::MAX, 0);
+    for g in &robot.groups {
+        for notes in &g.notes {
+            let kit = g.kind == orch_robot::GroupKind::Kit;
+            note_of.push(if kit { None } else { notes.first().copied() });
+            for &n in notes {
+                (low, high) = (low.min(n), high.max(n));
+            }
+        }
+    }
+    orch_roll::build::Rows {
+        keys: if low <= high { (low, high) } else { (36, 96) },
+        note_of,
+    }
 }
