@@ -266,7 +266,8 @@ pub struct BatonArgs {
 pub struct RunArgs {
     /// Where the MIDI bytes come from: serial:DEVICE (a DIN line, 31250 baud),
     /// rawmidi:DEVICE (or any file or FIFO), udp:PORT (datagrams on loopback), udp:HOST:PORT,
-    /// rtpmidi:[NAME@]PORT (an RTP-MIDI session answered on control port PORT, data PORT+1),
+    /// rtpmidi:PORT or rtpmidi:NAME@PORT (an RTP-MIDI session answered on control port PORT,
+    /// data PORT+1, under NAME),
     /// a dash for standard input, or (built with the `alsa` feature) alsa: (a sequencer port
     /// of orch's own to connect to) or alsa:CLIENT:PORT (that source, subscribed). A serial
     /// or raw MIDI device that goes away is opened again when it comes back.

@@ -293,7 +293,10 @@ fn the_roll_draws_drums_on_their_own_rows_and_folded_bars_on_the_bars() {
             .unwrap();
         assert!(out.status.success(), "{instrument}");
         let text = std::fs::read_to_string(&svg).unwrap();
-        assert!(text.contains("class=\"note on_time"), "{instrument}: strikes drawn");
+        assert!(
+            text.contains("class=\"note on_time"),
+            "{instrument}: strikes drawn"
+        );
         assert_eq!(text.contains("class=\"fold\""), folds, "{instrument}");
     }
 }

@@ -281,7 +281,8 @@ impl Strikes {
 
     /// Where a note on `channel` goes: `Some(Ok(key))` to a strike group's output, `Some(Err(reason))`
     /// if some strike group listens to the channel but none has an output for it (and the
-    /// keyboard does not take it: see [`Strikes::route`]), `None` if no strike group listens.
+    /// keyboard does not take it: see [`Config::land`](crate::Config::land)), `None` if no
+    /// strike group listens.
     pub fn find(&self, channel: Channel, note: Note) -> Option<Result<KeyOf, StrikeMiss>> {
         let mut miss = None;
         for (g, group) in self.groups().iter().enumerate() {
