@@ -23,6 +23,7 @@ fn room(seed: u64) -> Room {
         capture_offset_ms: 1712.3,
         reverb: Some((0.6, 0.0)),
         snr_db: Some(30.0),
+        thump: None,
         seed,
     }
 }

@@ -3,7 +3,7 @@
 //! noise; and the recordings it must refuse.
 
 use orch_calibrate::synthetic::{
-    clear_of_floor, errors, hidden_robot, record, record_strikes, HiddenKey, Room,
+    clear_of_floor, errors, hidden_robot, record, record_strikes, HiddenKey, Room, Thump,
 };
 use orch_calibrate::{analyze, robot_toml, Anchor, CalibrateError, Recording, Score, Strike};
 use orch_robot::Robot;
@@ -24,7 +24,7 @@ fn room(snr: f64) -> Room {
         capture_offset_ms: 1712.3,
         snr_db: Some(snr),
         reverb: true,
-        thump: false,
+        thump: None,
         seed: 7,
     }
 }
@@ -146,7 +146,7 @@ fn a_mechanical_thump_before_the_string_does_not_move_the_onset() {
     let score = Score::for_robot(&robot, 4).unwrap();
     let keys = hidden(&score, &robot, 9);
     let room = Room {
-        thump: true,
+        thump: Some(Thump::Click),
         ..room(30.0)
     };
     let rec = record(&score, &robot, &keys, &room);
