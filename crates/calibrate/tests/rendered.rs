@@ -177,9 +177,10 @@ fn the_calibrated_robot_toml_puts_the_hidden_robots_onsets_on_time() {
 /// Issue 26: a solenoid's thump 2–5 ms before each string (`Solenoid::ROBOT`: a click and the
 /// case's low thud, −12 dB against the string at full power, times the duty) in room 3. The
 /// broadband timing took a thump's rise for the onset (24 of the 166 strikes over 1.5 ms, in
-/// every octave, up to 14 ms early); where the string's periodicity starts later, it is the
-/// onset now. Left over: soft strikes in the two lowest octaves, where the thump is louder
-/// than the string and the strike is timed on the partials' envelope (8 over 1.5 ms).
+/// every octave, up to 14 ms early, a key's press delay 2.7 ms off); where the string's
+/// periodicity starts later, it is the onset now. Left over: 5 strikes in the two lowest
+/// octaves (soft ones, where the thump is as loud as the string, and one at velocity 85), up
+/// to 6.6 ms off.
 #[test]
 fn a_solenoids_thump_before_each_string_is_not_its_onset() {
     let (hidden, _) = full_robot();
