@@ -178,9 +178,9 @@ fn the_calibrated_robot_toml_puts_the_hidden_robots_onsets_on_time() {
 /// case's low thud, −12 dB against the string at full power, times the duty) in room 3. The
 /// broadband timing took a thump's rise for the onset (24 of the 166 strikes over 1.5 ms, in
 /// every octave, up to 14 ms early, a key's press delay 2.7 ms off); where the string's
-/// periodicity starts later, it is the onset now. Left over: 5 strikes in the two lowest
-/// octaves (soft ones, where the thump is as loud as the string, and one at velocity 85), up
-/// to 6.6 ms off.
+/// periodicity starts later, it is the onset now. Left over: 7 strikes in the two lowest
+/// octaves (soft ones, where the thump is as loud as the string and the strike is timed on
+/// the partials' envelope, and one at velocity 85), up to 14 ms early.
 #[test]
 fn a_solenoids_thump_before_each_string_is_not_its_onset() {
     let (hidden, _) = full_robot();
