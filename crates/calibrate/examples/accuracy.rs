@@ -34,7 +34,7 @@ fn main() {
                 capture_offset_ms: 1234.5 + 100.0 * seed as f64,
                 snr_db: Some(snr),
                 reverb: true,
-                thump: false,
+                thump: None,
                 seed,
             };
             let rec = record(&score, &robot, &keys, &room);

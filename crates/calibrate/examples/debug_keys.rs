@@ -23,7 +23,7 @@ fn main() {
         capture_offset_ms: 1234.5,
         snr_db: Some(snr),
         reverb,
-        thump: false,
+        thump: None,
         seed,
     };
     let rec = record(&score, &robot, &keys, &room);

@@ -28,6 +28,7 @@ fn main() {
         capture_offset_ms: 1712.3,
         reverb: reverb.then_some((0.6, 0.0)),
         snr_db: snr,
+        thump: None,
         seed: room_seed,
     };
     let rec = rendered::record(&score, &hidden, &rendered::string_font(), &room, None);

@@ -47,6 +47,7 @@ fn main() {
                     capture_offset_ms: 1234.5 + 100.0 * seed as f64,
                     reverb: Some((0.6, 0.0)),
                     snr_db: Some(snr),
+                    thump: None,
                     seed,
                 };
                 let t = Instant::now();

@@ -25,6 +25,7 @@ fn main() {
         capture_offset_ms: 1234.5,
         reverb: reverb.then_some((0.6, 0.0)),
         snr_db: snr,
+        thump: None,
         seed,
     };
     let font = if std::env::args().nth(4).is_some_and(|s| s == "tim") {

@@ -67,8 +67,13 @@
 //!   it shortened to 5 ms the thump becomes a second onset). The sharp timing is broadband
 //!   and could take the thump: its rise must last 5 ms (a click's falls back), must not
 //!   have begun before its search window, and must lie within 0.4 periods plus 15 ms of the
-//!   envelope's onset. A thump that runs into the string without falling back is taken for
-//!   the onset (the press delay is then the thump's). The thump is not measured.
+//!   envelope's onset. A solenoid's thump 2–5 ms before the string runs into the string
+//!   without falling back, so the onset is also looked for where the string's *periodicity*
+//!   starts (the high-passed signal times itself a whole number of the key's periods later:
+//!   a thump does not repeat); where that comes more than 1 ms after the energy's rise (3 ms
+//!   after a soft strike's envelope timing), it is the onset. Soft strikes in the two lowest
+//!   octaves, where the thump's low thud is as loud as the string in the key's own bands,
+//!   can still come out a few ms off (`--example thump`). The thump is not measured.
 //! - **A neighbour's decay still ringing**: keys are struck in order, a second apart, each
 //!   key's own noise frames (from 450 to 150 ms before each strike) hold whatever still
 //!   rings, so its threshold and string-power baseline include it; the timing crosses

@@ -11,8 +11,12 @@
 //! - **The string**: 10 partials `h f0 √(1 + B h²)` (B = 10⁻⁴), amplitudes `1/h`, random
 //!   phases, each decaying with a time constant from 1.2 s (C2) to about 0.3 s (C7),
 //!   shorter for higher partials; a 3 ms raised-cosine attack; the damper, 25 ms after the
-//!   note's end, stops it with a 40 ms time constant. Optionally a mechanical **thump**: 4 ms
-//!   of decaying white noise 12 ms before the string, as loud as the string (its amplitude).
+//!   note's end, stops it with a 40 ms time constant.
+//! - **A mechanical thump** before each string, optionally ([`Thump`]): the first model's
+//!   click ([`Thump::Click`]: 4 ms of decaying white noise 12 ms before the string, as loud
+//!   as the string, its amplitude), or a solenoid's ([`Thump::Solenoid`], [`Solenoid`]): a
+//!   click and the case's low-frequency thud, 2–5 ms before the string, its level set by the
+//!   solenoid's drive rather than by the string's loudness.
 //! - **The room** ([`Room`]): the capture offset (the recording starts that long before the
 //!   score), an optional **reverberation** (four parallel feedback combs of 29.7, 37.1, 41.1
 //!   and 43.7 ms with a 0.6 s reverberation time, mixed at 30 %: a decaying tail, and echoes
@@ -72,11 +76,84 @@ pub struct Room {
     pub snr_db: Option<f64>,
     /// A reverberant room.
     pub reverb: bool,
-    /// A mechanical thump before each string.
-    pub thump: bool,
+    /// A mechanical thump before each string (`None`: none).
+    pub thump: Option<Thump>,
     /// The noise's and phases' seed.
     pub seed: u64,
 }
+
+/// A mechanical thump before each string.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Thump {
+    /// The first model: 4 ms of white noise decaying with a 1 ms time constant, 12 ms before
+    /// the string, its amplitude the string's.
+    Click,
+    /// A solenoid's thump, a few ms before the string: see [`Solenoid`].
+    Solenoid(Solenoid),
+}
+
+/// A solenoid's mechanical thump: the plunger hitting its stop (or the key its bed) a few ms
+/// before the hammer reaches the string. Two parts, from one impact:
+///
+/// - **a click**: white noise decaying with a 0.4 ms time constant (broadband, over about
+///   2 ms);
+/// - **the case's thud**: two of its modes, one drawn from 60–150 Hz (8 ms time constant),
+///   one from 150–400 Hz (4 ms), at 0.7 and 0.5 of the click's amplitude, each starting as an
+///   impulse response does (a sine from 0). Low: in the two lowest octaves they lie among the
+///   string's own first partials, and decay over 20–30 ms, as long as a bass key's first
+///   period or two.
+///
+/// Its lead before the string is drawn for each strike from [`lead_ms`](Self::lead_ms). Its
+/// amplitude (the click's at its start, the modes' envelopes') is [`level_db`](Self::level_db)
+/// against the key's string at full power (the string's RMS just after its onset), times the
+/// strike's duty: the impact grows with the solenoid's drive, but far less than the string's
+/// sound, which falls 36 dB from full power to the softest strike while the duty falls by
+/// a half or less (6 dB). [`Solenoid::ROBOT`] is the issue's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Solenoid {
+    /// How long before the string the thump starts, ms: drawn uniformly for each strike.
+    pub lead_ms: (f64, f64),
+    /// Its amplitude at full power against the key's string at full power, dB.
+    pub level_db: f64,
+}
+
+impl Solenoid {
+    /// The thump of the recordings: 2–5 ms before the string, −20 dB against the
+    /// string at full power. At the softest strikes (the string at −36 dB, the duty about
+    /// half) the thump is then 10 dB louder than the string over its few ms, and the thud's
+    /// modes, in a bass key's own bands, about as loud as its soft string there; at full
+    /// power the string is 20 dB over it.
+    pub const ROBOT: Self = Self {
+        lead_ms: (2.0, 5.0),
+        level_db: -12.0,
+    };
+
+    /// Adds one thump to `x` (`rate` Hz) before a string starting at sample `string_at`,
+    /// `amp` its amplitude; its lead, modes and noise drawn from `rng`.
+    pub fn add(&self, x: &mut [f64], rate: f64, string_at: f64, amp: f64, rng: &mut Rng) {
+        let lead = rng.range(self.lead_ms.0, self.lead_ms.1);
+        let start = (string_at - lead / 1000.0 * rate).round().max(0.0) as usize;
+        let modes = [
+            (rng.range(60.0, 150.0), 0.008, 0.7),
+            (rng.range(150.0, 400.0), 0.004, 0.5),
+        ];
+        for n in 0..(0.040 * rate) as usize {
+            let t = n as f64 / rate;
+            let click = rng.normal() * (-t / 0.0004).exp();
+            let thud: f64 = modes
+                .iter()
+                .map(|&(f, tau, a)| a * (-t / tau).exp() * (std::f64::consts::TAU * f * t).sin())
+                .sum();
+            if let Some(y) = x.get_mut(start + n) {
+                *y += amp * (click + thud);
+            }
+        }
+    }
+}
+
+/// The RMS of a synthetic string of amplitude 1 just after its onset (10 partials of
+/// amplitude 1/h).
+pub const STRING_RMS: f64 = 0.880;
 
 /// A small deterministic generator (SplitMix64).
 #[derive(Clone, Debug)]
@@ -265,13 +342,20 @@ pub fn record_strikes(
             }
             *y += amp * attack * damp * v;
         }
-        if room.thump {
-            let t0 = ((onset_ms - 12.0) / 1000.0 * rate).max(0.0) as usize;
-            for n in 0..(0.004 * rate) as usize {
-                if let Some(y) = x.get_mut(t0 + n) {
-                    *y += amp * rng.normal() * (-(n as f64) / (0.001 * rate)).exp();
+        match room.thump {
+            Some(Thump::Click) => {
+                let t0 = ((onset_ms - 12.0) / 1000.0 * rate).max(0.0) as usize;
+                for n in 0..(0.004 * rate) as usize {
+                    if let Some(y) = x.get_mut(t0 + n) {
+                        *y += amp * rng.normal() * (-(n as f64) / (0.001 * rate)).exp();
+                    }
                 }
             }
+            Some(Thump::Solenoid(t)) => {
+                let a = k.gain * STRING_RMS * 10f64.powf(t.level_db / 20.0) * d;
+                t.add(&mut x, rate, start, a, &mut rng);
+            }
+            None => {}
         }
     }
     if room.reverb {
@@ -308,6 +392,8 @@ pub fn record_strikes(
 /// How far a calibration is from the hidden robot.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Errors {
+    /// Each measured press delay's error: (note, velocity, measured − hidden, ms).
+    pub strikes: Vec<(u8, u8, f64)>,
     /// The largest error of a measured press delay (each sounding level), ms.
     pub delay_max_ms: f64,
     /// The median of those errors, ms.
@@ -365,6 +451,7 @@ pub fn errors(
             if let Some(d) = l.press_delay_ms {
                 let truth = hidden.delay_at(duty(input, note, l.velocity));
                 delays.push((d - truth).abs());
+                e.strikes.push((note, l.velocity, d - truth));
                 if note >= 52 {
                     e.delay_max_from_e3_ms = e.delay_max_from_e3_ms.max((d - truth).abs());
                 }

@@ -48,7 +48,7 @@ fn fixture() -> &'static Fixture {
             capture_offset_ms: OFFSET_MS,
             snr_db: Some(40.0),
             reverb: false,
-            thump: false,
+            thump: None,
             seed: 5,
         };
         let mut samples = record(&score, &robot, &keys, &room).samples;

@@ -6,7 +6,7 @@
 
 mod support;
 
-use orch_calibrate::synthetic::errors;
+use orch_calibrate::synthetic::{errors, Solenoid};
 use orch_calibrate::{analyze, robot_toml, Anchor, Calibration, Score};
 use orch_robot::Robot;
 use orch_seq::Song;
@@ -23,6 +23,7 @@ fn room(seed: u64) -> Room {
         capture_offset_ms: 1712.3,
         reverb: Some((0.6, 0.0)),
         snr_db: Some(30.0),
+        thump: None,
         seed,
     }
 }
@@ -171,4 +172,41 @@ fn the_calibrated_robot_toml_puts_the_hidden_robots_onsets_on_time() {
         // What the calibration is for: the uncalibrated file is far off.
         assert!(i > 3.0, "{file}: {i:.2} ms uncalibrated");
     }
+}
+
+/// Issue 26: a solenoid's thump 2–5 ms before each string (`Solenoid::ROBOT`: a click and the
+/// case's low thud, −12 dB against the string at full power, times the duty) in room 3. The
+/// broadband timing took a thump's rise for the onset (24 of the 166 strikes over 1.5 ms, in
+/// every octave, up to 14 ms early, a key's press delay 2.7 ms off); where the string's
+/// periodicity starts later, it is the onset now. Left over: 7 strikes in the two lowest
+/// octaves (soft ones, where the thump is as loud as the string and the strike is timed on
+/// the partials' envelope, and one at velocity 85), up to 14 ms early.
+#[test]
+fn a_solenoids_thump_before_each_string_is_not_its_onset() {
+    let (hidden, _) = full_robot();
+    let room = Room {
+        thump: Some(Solenoid::ROBOT),
+        ..room(3)
+    };
+    let cal = calibrate(&pwm_text(), hidden, None, 60, &room);
+    let robot = Robot::from_toml(&pwm_text()).unwrap();
+    let score = Score::for_robot(&robot, 4).unwrap();
+    let out = robot_toml::calibrated(&pwm_text(), &cal).unwrap();
+    let e = errors(
+        &cal,
+        &Robot::from_toml(&out).unwrap(),
+        &robot,
+        &hidden.keys,
+        &score,
+    );
+    assert!(e.missed.is_empty() && e.softest_wrong.is_empty(), "{e:?}");
+    let over: Vec<_> = e.strikes.iter().filter(|s| s.2.abs() > 1.5).collect();
+    assert!(
+        over.len() <= 8,
+        "{} strikes over 1.5 ms: {over:?}",
+        over.len()
+    );
+    // From C4 up every strike within 1.5 ms.
+    assert!(over.iter().all(|s| s.0 < 60), "{over:?}");
+    assert!(e.press_delay_max_ms <= 2.0, "{e:?}");
 }

@@ -3,7 +3,7 @@
 //! noise; and the recordings it must refuse.
 
 use orch_calibrate::synthetic::{
-    clear_of_floor, errors, hidden_robot, record, record_strikes, HiddenKey, Room,
+    clear_of_floor, errors, hidden_robot, record, record_strikes, HiddenKey, Room, Solenoid, Thump,
 };
 use orch_calibrate::{analyze, robot_toml, Anchor, CalibrateError, Recording, Score, Strike};
 use orch_robot::Robot;
@@ -24,7 +24,7 @@ fn room(snr: f64) -> Room {
         capture_offset_ms: 1712.3,
         snr_db: Some(snr),
         reverb: true,
-        thump: false,
+        thump: None,
         seed: 7,
     }
 }
@@ -146,7 +146,7 @@ fn a_mechanical_thump_before_the_string_does_not_move_the_onset() {
     let score = Score::for_robot(&robot, 4).unwrap();
     let keys = hidden(&score, &robot, 9);
     let room = Room {
-        thump: true,
+        thump: Some(Thump::Click),
         ..room(30.0)
     };
     let rec = record(&score, &robot, &keys, &room);
@@ -165,6 +165,40 @@ fn a_mechanical_thump_before_the_string_does_not_move_the_onset() {
     );
     assert!(e.missed.is_empty() && e.softest_wrong.is_empty(), "{e:?}");
     assert!(e.delay_max_ms <= 1.0, "{e:?}");
+    assert!(cal.keys.iter().all(|k| k
+        .problems
+        .iter()
+        .all(|p| !p.contains("onsets for one strike"))));
+}
+
+/// A solenoid's thump 2–5 ms before each string ([`Solenoid::ROBOT`]), on the 12 keys from
+/// middle C: each strike within 1.5 ms, never two onsets.
+#[test]
+fn a_solenoids_thump_just_before_the_string_does_not_move_the_onset() {
+    let text = small_text();
+    let robot = Robot::from_toml(&text).unwrap();
+    let score = Score::for_robot(&robot, 4).unwrap();
+    let keys = hidden(&score, &robot, 9);
+    let room = Room {
+        thump: Some(Thump::Solenoid(Solenoid::ROBOT)),
+        ..room(30.0)
+    };
+    let rec = record(&score, &robot, &keys, &room);
+    let anchor = Anchor {
+        note: 60,
+        press_delay_ms: keys[0].press_delay_ms,
+    };
+    let cal = analyze(&rec, &robot, &score, Some(anchor)).unwrap();
+    let out = robot_toml::calibrated(&text, &cal).unwrap();
+    let e = errors(
+        &cal,
+        &Robot::from_toml(&out).unwrap(),
+        &robot,
+        &keys,
+        &score,
+    );
+    assert!(e.missed.is_empty() && e.softest_wrong.is_empty(), "{e:?}");
+    assert!(e.delay_max_ms <= 1.5, "{e:?}");
     assert!(cal.keys.iter().all(|k| k
         .problems
         .iter()

@@ -11,6 +11,11 @@
 //! - **The sound** ([`record`]): the performance's strikes through `orch_render::synth`
 //!   (TimGM6mb or whatever `orch render` would choose), the two channels mixed.
 //!   Optionally one key's strikes are taken out: a key that never sounds.
+//! - **A solenoid's thump** (optional, [`Room::thump`]): before each strike's string, the
+//!   synthetic recordings' [`Solenoid`] thump, its level against the key's string at full
+//!   power (the rendered string's RMS over its first 10 ms, less its strike's loudness in dB),
+//!   times the strike's duty (from its loudness and the hidden key's softest); it goes
+//!   through the room as the string does.
 //! - **The room** ([`Room`]): the capture offset (whole samples of silence before the score's
 //!   time 0); reverberation by convolution with a synthetic impulse response (the direct
 //!   sound, then from 5 ms on exponentially decaying Gaussian noise with a 60 dB decay time
@@ -21,7 +26,8 @@
 
 use std::sync::Arc;
 
-use orch_calibrate::synthetic::{HiddenKey, Rng};
+use orch_calibrate::fit::db_of_loudness;
+use orch_calibrate::synthetic::{HiddenKey, Rng, Solenoid};
 use orch_calibrate::{Recording, Score};
 use orch_perform::{
     perform, song_events, Link, MidiRecording, Outcome, Played, ScoreEvent, Setup, Tempo,
@@ -188,6 +194,8 @@ pub struct Room {
     pub reverb: Option<(f64, f64)>,
     /// Signal-to-noise ratio, dB.
     pub snr_db: Option<f64>,
+    /// A solenoid's thump before each string (`None`: none).
+    pub thump: Option<Solenoid>,
     /// The noise's seed.
     pub seed: u64,
 }
@@ -230,6 +238,9 @@ pub fn record(
         x.resize(want, 0.0);
     }
     let mut rng = Rng::new(room.seed ^ 0x000A_0D10);
+    if let Some(t) = room.thump {
+        add_thumps(&mut x, &keys, hidden, room.offset_samples(), &t, &mut rng);
+    }
     if let Some((rt60, drr)) = room.reverb {
         x = convolve(&x, &impulse_response(rt60, drr, &mut rng));
     }
@@ -244,6 +255,43 @@ pub fn record(
         }
     }
     Recording::from_samples(RATE, x.into_iter().map(|v| v as f32).collect())
+}
+
+/// A thump before each of `keys`' strikes (their strings start at their sample, `offset`
+/// samples into `x`): see the module notes.
+fn add_thumps(
+    x: &mut [f64],
+    keys: &[KeyEvent],
+    hidden: &Hidden,
+    offset: usize,
+    thump: &Solenoid,
+    rng: &mut Rng,
+) {
+    let low = hidden.robot.config.range.low().get();
+    let window = (0.010 * f64::from(RATE)) as usize;
+    // Each strike's sample and thump amplitude, all measured before any thump is added.
+    let strikes: Vec<(usize, f64)> = keys
+        .iter()
+        .filter_map(|k| {
+            let Action::Strike { loudness } = k.action else {
+                return None;
+            };
+            let at = offset + k.sample(RATE) as usize;
+            let span = &x[at.min(x.len())..(at + window).min(x.len())];
+            let rms = (span.iter().map(|v| v * v).sum::<f64>() / span.len().max(1) as f64).sqrt();
+            let full = rms / 10f64.powf(db_of_loudness(loudness.get()) / 20.0);
+            let softest = hidden.keys[usize::from(k.note - low)].softest;
+            let duty = if softest >= 1.0 {
+                1.0
+            } else {
+                softest + (loudness.get() - 1.0) / 126.0 * (1.0 - softest)
+            };
+            Some((at, full * 10f64.powf(thump.level_db / 20.0) * duty))
+        })
+        .collect();
+    for (at, amp) in strikes {
+        thump.add(x, f64::from(RATE), at as f64, amp, rng);
+    }
 }
 
 /// The room's impulse response: 1 (the direct sound), then from 5 ms on Gaussian noise
