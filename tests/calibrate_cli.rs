@@ -63,7 +63,7 @@ fn calibrate_wav_prints_a_robot_toml_that_loads_and_json_measurements() {
         capture_offset_ms: 800.0,
         snr_db: Some(30.0),
         reverb: true,
-        thump: false,
+        thump: None,
         seed: 2,
     };
     let rec = record(&score, &robot, &keys, &room);

@@ -82,7 +82,7 @@ mod mic {
             capture_offset_ms: 250.0,
             snr_db: Some(40.0),
             reverb: false,
-            thump: false,
+            thump: None,
             seed: 9,
         };
         let mut samples = record(&score, &robot, &keys, &room).samples;
