@@ -265,11 +265,13 @@ fn a_strikes_level_follows_its_exact_loudness_between_whole_steps() {
         keys.push(events::KeyEvent {
             at_ns,
             note: 60,
+            instrument: events::Instrument::PIANO,
             action: events::Action::Strike { loudness },
         });
         keys.push(events::KeyEvent {
             at_ns: at_ns + 500_000_000,
             note: 60,
+            instrument: events::Instrument::PIANO,
             action: events::Action::Release,
         });
     }
