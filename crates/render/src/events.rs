@@ -528,4 +528,100 @@ mod tests {
             ]
         );
     }
+
+    fn strike(at_ms: i64, note: u8) -> KeyEvent {
+        KeyEvent {
+            at_ns: at_ms * 1_000_000,
+            note,
+            instrument: Instrument::Drums,
+            action: Action::Strike {
+                loudness: Loudness::of_velocity(100),
+            },
+        }
+    }
+
+    fn released(at_ms: i64, note: u8) -> KeyEvent {
+        KeyEvent {
+            action: Action::Release,
+            ..strike(at_ms, note)
+        }
+    }
+
+    #[test]
+    fn a_strike_rings_until_its_output_strikes_again_or_for_eight_seconds() {
+        let mut events = Vec::new();
+        let mut rings = Rings::new(2);
+        // The hi-hat (output 0) open, then closed: the open one's sound ends there; closed
+        // again: the same note ends its own sound (no release of its own).
+        rings.strike(0, strike(0, 46), &mut events);
+        rings.strike(0, strike(500, 42), &mut events);
+        rings.strike(0, strike(600, 42), &mut events);
+        // The kick (output 1), then again 9 s later: released 8 s after the first.
+        rings.strike(1, strike(100, 36), &mut events);
+        rings.strike(1, strike(9100, 36), &mut events);
+        rings.finish(&mut events);
+        events.sort_by_key(|e| e.at_ns);
+        assert_eq!(
+            events,
+            vec![
+                strike(0, 46),
+                strike(100, 36),
+                released(500, 46),
+                strike(500, 42),
+                strike(600, 42),
+                released(8100, 36),
+                released(8600, 42),
+                strike(9100, 36),
+                released(17_100, 36),
+            ]
+        );
+    }
+
+    #[test]
+    fn the_scores_channel_10_plays_the_drum_kit_and_rings_past_its_note_offs() {
+        // Channel 10: 42 at 0 (off at 50 ms), 46 at 500 ms; channel 1: 60 at 0, off at 1 s.
+        let song = smf(&[
+            0x00, 0x99, 42, 100, 0x00, 0x90, 60, 100, 0x30, 0x89, 42, 0, 0x83, 0x30, 0x99, 46, 100,
+            0x83, 0x60, 0x80, 60, 0,
+        ]);
+        let e = from_song(&song);
+        let ms = 1_000_000i64;
+        let drums: Vec<(i64, u8, bool)> = e
+            .iter()
+            .filter(|k| k.instrument == Instrument::Drums)
+            .map(|k| {
+                (
+                    k.at_ns / ms,
+                    k.note,
+                    matches!(k.action, Action::Strike { .. }),
+                )
+            })
+            .collect();
+        assert_eq!(
+            drums,
+            [
+                (0, 42, true),
+                (500, 46, true),
+                (8000, 42, false),
+                (8500, 46, false)
+            ]
+        );
+        let piano: Vec<(i64, u8)> = e
+            .iter()
+            .filter(|k| k.instrument == Instrument::PIANO)
+            .map(|k| (k.at_ns / ms, k.note))
+            .collect();
+        assert_eq!(piano, [(0, 60), (1000, 60)]);
+    }
+
+    #[test]
+    fn gm_programs_count_from_one_and_the_kit_is_bank_128() {
+        assert_eq!(Instrument::gm_program(10), Some(Instrument::Program(9)));
+        assert_eq!(Instrument::gm_program(1), Some(Instrument::PIANO));
+        assert_eq!(Instrument::gm_program(0), None);
+        assert_eq!(Instrument::gm_program(129), None);
+        assert_eq!(Instrument::Drums.bank_and_program(), (128, 0));
+        assert_eq!(Instrument::Program(9).bank_and_program(), (0, 9));
+        assert_eq!(keyboard(126, 5), vec![Output::key(126), Output::key(127)]);
+    }
 }
