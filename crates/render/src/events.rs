@@ -23,7 +23,7 @@
 //! A strike output's pulse ends by itself after a few ms, but the drum or bar it hit is not
 //! damped: the virtual robot's key-up is not a release for it. Its voice is left to the
 //! soundfont's own decay (a sampled drum or bar dies away by itself: on TimGM6mb a kick in
-//! 80 ms, a closed hi-hat in 70 ms, an open one in 2.5 s, a crash in 4.2 s, a glockenspiel's G5
+//! 80 ms, a closed hi-hat in 70 ms, an open one in 2.5 s, a crash in 4.2 to 4.6 s, a glockenspiel's G5
 //! in 4.7 s, C8 in 1.6 s), and is released (a Note-Off: the font's release) only
 //!
 //! - when **its output strikes again** (one drum, one bar: the new strike takes over its
