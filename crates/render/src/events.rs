@@ -23,23 +23,24 @@
 //! A strike output's pulse ends by itself after a few ms, but the drum or bar it hit is not
 //! damped: the virtual robot's key-up is not a release for it. Its voice is left to the
 //! soundfont's own decay (a sampled drum or bar dies away by itself: on TimGM6mb a kick in
-//! 80 ms, a closed hi-hat in 70 ms, an open one in 2.5 s, a crash in 4.2 to 4.6 s, a glockenspiel's G5
-//! in 4.7 s, C8 in 1.6 s), and is released (a Note-Off: the font's release) only
+//! 80 ms, a closed hi-hat in 70 ms, a tom in 1.3 to 2.1 s, an open hi-hat in 2.5 s, a crash
+//! in 4.2 to 4.6 s, a glockenspiel's G5 in 4.7 s, its C8 in 1.6 s), and is released (a
+//! Note-Off: the font's release) only
 //!
 //! - when **its output strikes again** (one drum, one bar: the new strike takes over its
-//!   vibration, as a key's re-strike does a string's; a hi-hat struck closed after open stops
-//!   the open one's wash), or
-//! - [`RING_NS`] (8 s) after its strike, which no drum or bar of the Debian fonts outlasts:
-//!   only a font whose strike sounds sustain (a looped sample held at a level) is cut there,
-//!   instead of piling up voices and ringing to the end of the render.
+//!   vibration, as a key's re-strike does a string's), or
+//! - [`RING_NS`] (8 s) after its strike, which no drum or bar of TimGM6mb outlasts: only a
+//!   font whose strikes sustain (a looped sample held at a level) is cut there, instead of
+//!   piling up voices and ringing to the end of the render.
 //!
 //! General MIDI lets a receiver ignore Note-Offs on channel 10, and TimGM6mb's drums and
 //! glockenspiel barely change with one (their release is about as long as their decay): so
-//! on those fonts a strike sounds the same whenever its Note-Off comes, and these two rules
-//! matter only on other fonts. (A kit's exclusive classes, a pedal closing an open hi-hat on
-//! another output, are not played: each strike starts on a synthesizer of its own, see
-//! [`crate::synth`]; the hi-hat output's own re-strikes are.)
-//!
+//! on that font a strike sounds the same whenever its Note-Off comes (an open hi-hat struck
+//! closed rings on under the closed one), and these two rules matter on fonts with short
+//! releases. A kit's exclusive classes (a closed or pedal hi-hat cutting an open one short)
+//! are not played: each strike starts on a synthesizer of its own, see [`crate::synth`], and
+//! a font plays its exclusive classes within one synthesizer's channel.
+
 //! ## Which data says what (the robot)
 //!
 //! - **When a key strikes, and how loud**: each [`Press`](orch_sim::Press) of the

@@ -12,9 +12,9 @@ use crate::synth::{set_instrument, synth_settings, synthesizer};
 /// Each note's **lead** in this soundfont: the samples from a voice's start to its first
 /// sample that is not silent (the soundfont's volume-envelope delay, which the SF2 default of
 /// −12 000 timecents makes about 1 ms, and any silence at the head of its sample). Measured
-/// once for each instrument, note and velocity a render plays, by playing it alone from silence on the
-/// render's own settings, and taken off the strike's start, so that the sound begins on the
-/// strike's sample. At most [`MAX_LEAD_MS`]; a note silent that long counts no lead.
+/// once for each instrument, note and velocity a render plays, by playing it alone from
+/// silence on the render's own settings, and taken off the strike's start, so that the sound
+/// begins on the strike's sample. At most [`MAX_LEAD_MS`]; a note silent that long counts no lead.
 pub(crate) struct Leads {
     font: Arc<SoundFont>,
     settings: SynthesizerSettings,
