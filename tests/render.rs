@@ -582,3 +582,43 @@ fn a_piano_and_a_drum_kit_render_into_one_file() {
         );
     }
 }
+
+#[test]
+fn a_closed_or_pedal_hi_hat_cuts_an_open_one_short() {
+    // The hi-hat output open (46) then closed (42); open again, then the pedal's output (44).
+    // An open hi-hat alone rings 2.5 s on TimGM6mb, a closed or pedal one under 100 ms: the
+    // soundfont's exclusive class (42, 44 and 46: class 1) ends the open one at the closing
+    // strike, on whichever synthesizer and channel each plays, as one synthesizer would.
+    let notes = [
+        (300, 9, 46, 100, 50),
+        (800, 9, 42, 100, 50),
+        (2000, 9, 46, 100, 50),
+        (2500, 9, 44, 100, 50),
+    ];
+    let midi = tmp("hi-hat.mid");
+    std::fs::write(&midi, smf_on(&notes)).unwrap();
+    let robot = instrument("drums");
+    let lines = account(&midi, &robot);
+    let (l, r) = render(&midi, &robot, false, "hi-hat.wav");
+    let sounded: Vec<usize> = lines
+        .iter()
+        .map(|l| sample(l["sounded_ms"].as_f64().unwrap()) as usize)
+        .collect();
+    // The open hi-hats come after silence; each closing strike on an open one's sound.
+    let found = onsets(&l, &r);
+    assert_eq!(found, [sounded[0] as i64, sounded[2] as i64]);
+    let ms = |n: f64| sample(n) as usize;
+    assert!(
+        onset::rms(&l, &r, sounded[0], sounded[0] + ms(300.0)) > 1e-3,
+        "the open hi-hat sounds"
+    );
+    for closing in [1, 3] {
+        let quiet = onset::rms(
+            &l,
+            &r,
+            sounded[closing] + ms(150.0),
+            sounded[closing] + ms(1000.0),
+        );
+        assert_eq!(quiet, 0.0, "strike {closing}: silence 150 ms after it");
+    }
+}

@@ -35,11 +35,11 @@
 //!
 //! General MIDI lets a receiver ignore Note-Offs on channel 10, and TimGM6mb's drums and
 //! glockenspiel barely change with one (their release is about as long as their decay): so
-//! on that font a strike sounds the same whenever its Note-Off comes (an open hi-hat struck
-//! closed rings on under the closed one), and these two rules matter on fonts with short
-//! releases. A kit's exclusive classes (a closed or pedal hi-hat cutting an open one short)
-//! are not played: each strike starts on a synthesizer of its own, see [`crate::synth`], and
-//! a font plays its exclusive classes within one synthesizer's channel.
+//! on that font a strike sounds the same whenever its Note-Off comes, and these two rules
+//! matter on fonts with short releases. What does cut a drum short is the soundfont's
+//! exclusive classes, as a synthesizer plays them: a closed or pedal hi-hat (42, 44) ends an
+//! open one's (46) sound at its strike, whichever outputs they are on (see
+//! `crate::exclusive`, done across the render's synthesizers in [`crate::synth`]).
 
 //! ## Which data says what (the robot)
 //!

@@ -75,6 +75,7 @@
 
 pub mod error;
 pub mod events;
+mod exclusive;
 pub mod lead;
 pub mod onset;
 pub mod soundfont;

@@ -28,7 +28,10 @@
 //! begins (one string per key). A strike never takes the synthesizer and channel of its
 //! key's previous strike, nor those of a voice of the same note still held (a Note-Off names
 //! only a channel and a note), so that one strike's release never touches another's voice.
-//! A strike that rings on (a drum, a bar) is released as [`crate::events`] says.
+//! A strike that rings on (a drum, a bar) is released as [`crate::events`] says. A voice of
+//! a soundfont's exclusive class (a General MIDI kit's hi-hats) is cut where another of its
+//! class starts, on whichever synthesizer and channel it plays (a silent Note-On of the class
+//! there: rustysynth's own exclusive classes, which act within one synthesizer's channel).
 //!
 //! **Instruments.** Each strike sounds as its [`Instrument`]: the channel it goes to is set
 //! to the instrument's bank and program (bank select, program change) just before its
@@ -61,6 +64,7 @@ use rustysynth::{SoundFont, Synthesizer, SynthesizerSettings};
 
 use crate::error::RenderError;
 use crate::events::{Action, Instrument, KeyEvent};
+use crate::exclusive::{Classes, SILENT_VELOCITY};
 use crate::lead::Leads;
 
 /// The synthesizers' block, samples (rustysynth takes 8..=1024).
@@ -177,6 +181,9 @@ enum Cmd {
     On(u8, u8, u8, Instrument),
     /// Channel, note.
     Off(u8, u8),
+    /// Channel, note, instrument: cut the voice of that note's exclusive class (see
+    /// [`crate::exclusive`]).
+    Cut(u8, u8, Instrument),
 }
 
 /// One synthesizer, its blocks starting on the samples `phase + 64k`, and what it is to do
@@ -238,7 +245,12 @@ struct Plan {
 /// each instrument's note's voice (its lane, channel and start); each lane's commands in its
 /// own samples (a strike starts early by its lead, so a lane's commands do not come in the
 /// events' order).
-fn schedule(events: &[KeyEvent], rate: u32, leads: &mut Leads) -> Result<Plan, RenderError> {
+fn schedule(
+    events: &[KeyEvent],
+    rate: u32,
+    leads: &mut Leads,
+    classes: &mut Classes,
+) -> Result<Plan, RenderError> {
     let mut order: Vec<(u64, usize)> = events
         .iter()
         .enumerate()
@@ -293,6 +305,11 @@ fn schedule(events: &[KeyEvent], rate: u32, leads: &mut Leads) -> Result<Plan, R
         }
         if let Some((begin, v, ch)) = start {
             let p = lane_of(begin);
+            // The voices of its exclusive class it cuts, before it starts.
+            for (q, qch, qnote) in classes.start(e.instrument, note, v, p, ch) {
+                let cut = begin.max(q as u64);
+                plan.cmds[q].push((cut - q as u64, Cmd::Cut(qch, qnote, e.instrument)));
+            }
             plan.cmds[p].push((begin - p as u64, Cmd::On(ch, note, v, e.instrument)));
             holder.insert(id, (p, ch, begin));
             plan.strikes += 1;
@@ -363,7 +380,7 @@ pub fn render(
         });
     }
     let mut leads = Leads::new(font, rate, settings.gain);
-    let plan = schedule(events, rate, &mut leads)?;
+    let plan = schedule(events, rate, &mut leads, &mut Classes::new(font))?;
     let mut out = Rendered {
         strikes: plan.strikes,
         lead_max: plan.lead_max,
@@ -450,6 +467,11 @@ impl Lane {
                             self.synth.note_on(ch.into(), note.into(), v.into())
                         }
                         Cmd::Off(ch, note) => self.synth.note_off(ch.into(), note.into()),
+                        Cmd::Cut(ch, note, instrument) => {
+                            set_instrument(&mut self.synth, ch, instrument);
+                            self.synth
+                                .note_on(ch.into(), note.into(), SILENT_VELOCITY.into());
+                        }
                     }
                     continue;
                 }
