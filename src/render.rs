@@ -6,8 +6,12 @@ use std::io::Write;
 use std::time::Instant;
 
 use anyhow::Context;
+use orch_perform::Played;
 use orch_perform::Tempo;
-use orch_render::{events, soundfont, synth, wav::WavOut, RenderError, Settings};
+use orch_render::{
+    events, soundfont, synth, wav::WavOut, Instrument, Output, RenderError, Settings,
+};
+use orch_robot::{GroupKind, Robot};
 
 use crate::cli::RenderArgs;
 use crate::error::bad_input;
@@ -37,10 +41,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         // The sounds' key-ups are needed, not only the presses.
         setup.sim.keep = orch_sim::Keep::Everything;
         let played = play_fast(&song, &setup)?;
-        let keys = events::from_performance(
+        let keys = events::from_robot(
             &played.performance,
             played.start_us,
-            robot.config.range.low().get(),
+            &outputs(&robot),
+            &strike_notes(&played),
         )
         .map_err(lift)?;
         (keys, "the robot")
@@ -81,4 +86,71 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         seconds / took.max(1e-9),
     )?;
     Ok(())
+}
+
+/// What each of `robot`'s outputs sounds as: a keyboard key the piano at its note, a kit's
+/// output the General MIDI drum kit (at its first note, where the account does not say which
+/// of its notes a strike was), a pitched group's bar its program at the bar's note (the
+/// glockenspiel where the group names no program); an output in no group, the piano at the
+/// note of its place above the keyboard's lowest.
+fn outputs(robot: &Robot) -> Vec<Output> {
+    let keys = robot
+        .groups
+        .iter()
+        .map(|g| usize::from(g.first) + g.outputs.len())
+        .max()
+        .unwrap_or(0);
+    (0..keys)
+        .map(|k| {
+            let key = k as u8;
+            let Some(g) = robot.group_of(key) else {
+                return Output::key(robot.config.range.low().get().saturating_add(key) & 0x7F);
+            };
+            let i = usize::from(key - g.first);
+            let note = g
+                .notes
+                .get(i)
+                .and_then(|n| n.first())
+                .copied()
+                .unwrap_or(60);
+            match g.kind {
+                GroupKind::Keyboard => Output::key(note),
+                GroupKind::Kit => Output::drum(note),
+                GroupKind::Pitched => Output::bar(
+                    g.program
+                        .and_then(Instrument::gm_program)
+                        .unwrap_or(GLOCKENSPIEL),
+                    note,
+                ),
+            }
+        })
+        .collect()
+}
+
+/// General MIDI's glockenspiel (program 10 as people count).
+const GLOCKENSPIEL: Instrument = Instrument::Program(9);
+
+/// Which note each strike of the performance was, as written: every note that sounded with a
+/// strike of its own, its landing key and its sound time (the account's `sounded_ms`, in µs on
+/// the performance's clock).
+fn strike_notes(played: &Played) -> Vec<events::StrikeNote> {
+    played
+        .records
+        .iter()
+        .filter_map(|r| {
+            let key = r.landing?.key;
+            let onset_us = match r.outcome {
+                orch_perform::Outcome::OnTime { error_us } => i64::from(error_us),
+                orch_perform::Outcome::Late { by_us } => i64::from(by_us),
+                orch_perform::Outcome::Early { by_us } => -i64::from(by_us),
+                _ => return None,
+            };
+            let sounded_us = u64::try_from(r.score_at_us + onset_us).ok()?;
+            Some(events::StrikeNote {
+                key,
+                sounded_us,
+                note: r.note,
+            })
+        })
+        .collect()
 }

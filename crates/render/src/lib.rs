@@ -3,16 +3,20 @@
 //! A builder cannot hear a robot that does not exist yet. This crate turns the virtual
 //! robot's performance into sound: each strike sounds when the virtual robot says it does,
 //! at its loudness; late, dropped, joined and too-soft notes sound (or do not) as they would
-//! on the robot; each sound stops when its key is fully up again. The score itself renders
-//! the same way (every note at its score time and velocity), to listen side by side.
+//! on the robot; each key's sound stops when the key is fully up again. A drum kit plays
+//! through the soundfont's General MIDI drum kit (each strike the drum the score asked for), a
+//! glockenspiel through its General MIDI program at its bars' pitches, the keyboard on the
+//! piano, all in one mix; a drum or bar rings on after its strike, as one does. The score
+//! itself renders the same way (every note at its score time and velocity, channel 10 on the
+//! drum kit), to listen side by side.
 //! `orch render` is its command line.
 //!
-//! - [`events`]: what the keys do, from a performance ([`events::from_performance`]: which
-//!   data gives the strike times, the loudness and the key-ups is said there) or from the
-//!   score ([`events::from_song`]).
+//! - [`events`]: what the keys do, from a performance ([`events::from_robot`]: which
+//!   data gives the strike times, the loudness, the key-ups and each output's sound is said
+//!   there; how long a strike rings) or from the score ([`events::from_song`]).
 //! - [`synth`]: key events to samples through a SoundFont, every strike's first sound on its
 //!   own sample (64 synthesizers side by side, a block phase each; each voice started
-//!   early by the soundfont's own silent lead, measured per note and velocity).
+//!   early by the soundfont's own silent lead, measured per instrument, note and velocity).
 //! - [`lead`]: how long each note of a soundfont is silent after its voice starts.
 //! - [`soundfont`]: the user's soundfont, or one a Debian package installed.
 //! - [`wav`]: stereo 32-bit float WAV files through `hound`.
@@ -37,7 +41,7 @@
 //! are SoundFont 2.
 //!
 //! ```no_run
-//! use orch_render::{events, soundfont, synth, wav, Loudness};
+//! use orch_render::{events, soundfont, synth, wav, Instrument, Loudness};
 //! # fn main() -> Result<(), orch_render::RenderError> {
 //! let font = soundfont::load(&soundfont::find(None)?)?;
 //! // Middle C struck at 0.5 s at velocity 100, released at 1.5 s.
@@ -45,9 +49,15 @@
 //!     events::KeyEvent {
 //!         at_ns: 500_000_000,
 //!         note: 60,
+//!         instrument: Instrument::PIANO,
 //!         action: events::Action::Strike { loudness: Loudness::of_velocity(100) },
 //!     },
-//!     events::KeyEvent { at_ns: 1_500_000_000, note: 60, action: events::Action::Release },
+//!     events::KeyEvent {
+//!         at_ns: 1_500_000_000,
+//!         note: 60,
+//!         instrument: Instrument::PIANO,
+//!         action: events::Action::Release,
+//!     },
 //! ];
 //! let settings = synth::Settings::default();
 //! let mut out = wav::WavOut::create("c.wav".as_ref(), settings.sample_rate)?;
@@ -65,6 +75,7 @@
 
 pub mod error;
 pub mod events;
+mod exclusive;
 pub mod lead;
 pub mod onset;
 pub mod soundfont;
@@ -72,7 +83,7 @@ pub mod synth;
 pub mod wav;
 
 pub use error::RenderError;
-pub use events::{Action, KeyEvent};
+pub use events::{Action, Instrument, KeyEvent, Output, StrikeNote};
 pub use orch_sim::Loudness;
 pub use rustysynth::SoundFont;
 pub use synth::{render, Rendered, Settings};

@@ -26,8 +26,18 @@
 //! sound then dies away by the soundfont's release (rustysynth makes it 10 ms at the least,
 //! against clicks). A strike on a key still sounding ends the sound it had where the new one
 //! begins (one string per key). A strike never takes the synthesizer and channel of its
-//! key's previous strike (15 MIDI channels, all playing the piano), so that one strike's
-//! release never touches another's voice.
+//! key's previous strike, nor those of a voice of the same note still held (a Note-Off names
+//! only a channel and a note), so that one strike's release never touches another's voice.
+//! A strike that rings on (a drum, a bar) is released as [`crate::events`] says. A voice of
+//! a soundfont's exclusive class (a General MIDI kit's hi-hats) is cut where another of its
+//! class starts, on whichever synthesizer and channel it plays (a silent Note-On of the class
+//! there: rustysynth's own exclusive classes, which act within one synthesizer's channel).
+//!
+//! **Instruments.** Each strike sounds as its [`Instrument`]: the channel it goes to is set
+//! to the instrument's bank and program (bank select, program change) just before its
+//! Note-On, and a voice keeps the preset it started with, so the 15 channels serve a piano,
+//! a drum kit (bank 128 on any channel: rustysynth plays a bank by its number, not by the
+//! channel) and a glockenspiel at once, all mixed into one output.
 //!
 //! **Loudness.** Each strike sounds at its exact loudness, not at a whole velocity step: see
 //! [`expression_share`].
@@ -47,13 +57,14 @@
 //! length of the piece; it ends when every voice has died away after the last event (at most
 //! [`MAX_TAIL_S`] later).
 
-use std::collections::VecDeque;
+use std::collections::{HashMap, VecDeque};
 use std::sync::Arc;
 
 use rustysynth::{SoundFont, Synthesizer, SynthesizerSettings};
 
 use crate::error::RenderError;
-use crate::events::{Action, KeyEvent};
+use crate::events::{Action, Instrument, KeyEvent};
+use crate::exclusive::{Classes, SILENT_VELOCITY};
 use crate::lead::Leads;
 
 /// The synthesizers' block, samples (rustysynth takes 8..=1024).
@@ -71,7 +82,7 @@ pub const MAX_TAIL_S: u32 = 30;
 /// Voices each synthesizer may play at once (rustysynth's most): tails of released notes
 /// are never stolen by new strikes in any file a robot can play.
 const POLYPHONY: usize = 256;
-/// The General MIDI program every key plays: 0, Acoustic Grand Piano.
+/// The General MIDI program every channel starts with: 0, Acoustic Grand Piano.
 const PROGRAM: i32 = 0;
 /// The synthesizer velocity loudness 1 plays at. See [`voice_for`].
 pub const SOFTEST_VELOCITY: u8 = 16;
@@ -109,12 +120,13 @@ pub fn expression_share(channel: usize) -> f64 {
 }
 
 /// The channel index (into the render's 15 channels) and whole velocity that play
-/// `loudness` nearest to its exact level, other than on the channel `not` (a key's previous
-/// strike's on the same synthesizer, see the [module notes](self): then within 0.08 dB).
-pub fn voice_for(loudness: f64, not: Option<usize>) -> (usize, u8) {
+/// `loudness` nearest to its exact level, other than on the channels `not` (a key's previous
+/// strike's on the same synthesizer, see the [module notes](self): one left out, within
+/// 0.08 dB). All 15 left out: channel index 0.
+pub fn voice_for(loudness: f64, not: &[usize]) -> (usize, u8) {
     let want = synth_velocity(loudness);
     let mut best = (f64::INFINITY, 0, 127);
-    for c in (0..CHANNELS.len()).filter(|&c| Some(c) != not) {
+    for c in (0..CHANNELS.len()).filter(|c| !not.contains(c)) {
         let f = expression_share(c);
         let v = (want / f).round().clamp(1.0, 127.0);
         let err = (v * f / want).ln().abs();
@@ -165,10 +177,13 @@ pub struct Rendered {
 }
 
 enum Cmd {
-    /// Channel, note, velocity.
-    On(u8, u8, u8),
+    /// Channel, note, velocity, what it sounds as.
+    On(u8, u8, u8, Instrument),
     /// Channel, note.
     Off(u8, u8),
+    /// Channel, note, instrument: cut the voice of that note's exclusive class (see
+    /// [`crate::exclusive`]).
+    Cut(u8, u8, Instrument),
 }
 
 /// One synthesizer, its blocks starting on the samples `phase + 64k`, and what it is to do
@@ -183,10 +198,11 @@ struct Lane {
     right: Vec<f32>,
 }
 
-/// The MIDI channels voices are spread over, every one playing [`PROGRAM`], each at its own
-/// expression ([`expression_share`]); a key's successive strikes never share one, so
-/// releasing one strike's voice never touches another's (channel 10, index 9, is the drums'
-/// in General MIDI: not used).
+/// The MIDI channels voices are spread over, each at its own expression
+/// ([`expression_share`]), each set to a strike's instrument before its Note-On; a key's
+/// successive strikes never share one, so releasing one strike's voice never touches
+/// another's (channel 10, index 9, is rustysynth's percussion channel, whose bank select
+/// adds 128: not used; the drums are bank 128 on the others).
 const CHANNELS: [u8; 15] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 12, 13, 14, 15];
 
 /// The synthesizer settings every render and lead measurement uses.
@@ -214,6 +230,134 @@ pub(crate) fn synthesizer(
     Ok(synth)
 }
 
+/// Each lane's commands, from the events: see [`schedule`].
+struct Plan {
+    /// Each lane's commands, in its own samples, not sorted.
+    cmds: Vec<Vec<(u64, Cmd)>>,
+    strikes: u64,
+    lead_max: u64,
+    /// The sample of the last event, and of the last strike.
+    last: u64,
+    last_strike: u64,
+}
+
+/// Where each voice goes and when it starts and stops: the events in time order; who holds
+/// each instrument's note's voice (its lane, channel and start); each lane's commands in its
+/// own samples (a strike starts early by its lead, so a lane's commands do not come in the
+/// events' order).
+fn schedule(
+    events: &[KeyEvent],
+    rate: u32,
+    leads: &mut Leads,
+    classes: &mut Classes,
+) -> Result<Plan, RenderError> {
+    let mut order: Vec<(u64, usize)> = events
+        .iter()
+        .enumerate()
+        .map(|(i, e)| (e.sample(rate), i))
+        .collect();
+    order.sort_unstable();
+    let mut holder: HashMap<(Instrument, u8), (usize, u8, u64)> = HashMap::new();
+    let mut last_voice: HashMap<(Instrument, u8), (usize, usize)> = HashMap::new();
+    let mut plan = Plan {
+        cmds: (0..PHASES).map(|_| Vec::new()).collect(),
+        strikes: 0,
+        lead_max: 0,
+        last: 0,
+        last_strike: 0,
+    };
+    for &(at, i) in &order {
+        let e = &events[i];
+        let note = e.note & 0x7F;
+        let id = (e.instrument, note);
+        let start = match e.action {
+            Action::Strike { loudness } => {
+                let busy = |lane: usize| -> Vec<usize> {
+                    let held = holder
+                        .iter()
+                        .filter(|((_, n), (q, _, _))| *n == note && *q == lane)
+                        .map(|(_, (_, ch, _))| channel_index(*ch));
+                    let previous = last_voice
+                        .get(&id)
+                        .filter(|(q, _)| *q == lane)
+                        .map(|(_, c)| *c);
+                    held.chain(previous).collect()
+                };
+                let (c, v, lead) = voice(
+                    loudness.get(),
+                    at,
+                    |v| leads.of(e.instrument, note, v),
+                    busy,
+                )?;
+                last_voice.insert(id, (lane_of(at.saturating_sub(lead)), c));
+                plan.lead_max = plan.lead_max.max(lead);
+                plan.last_strike = plan.last_strike.max(at);
+                Some((at.saturating_sub(lead), v, CHANNELS[c]))
+            }
+            Action::Release => None,
+        };
+        // The sound this instrument's note had ends at its release, or where a new strike
+        // of it begins.
+        if let Some((q, ch, began)) = holder.remove(&id) {
+            let off = start.map_or(at, |(s, _, _)| s).max(began);
+            plan.cmds[q].push((off - q as u64, Cmd::Off(ch, note)));
+            plan.last = plan.last.max(off);
+        }
+        if let Some((begin, v, ch)) = start {
+            let p = lane_of(begin);
+            // The voices of its exclusive class it cuts, before it starts.
+            for (q, qch, qnote) in classes.start(e.instrument, note, v, p, ch) {
+                let cut = begin.max(q as u64);
+                plan.cmds[q].push((cut - q as u64, Cmd::Cut(qch, qnote, e.instrument)));
+            }
+            plan.cmds[p].push((begin - p as u64, Cmd::On(ch, note, v, e.instrument)));
+            holder.insert(id, (p, ch, begin));
+            plan.strikes += 1;
+        }
+        plan.last = plan.last.max(at);
+    }
+    Ok(plan)
+}
+
+/// The lane whose blocks start on sample `s`.
+fn lane_of(s: u64) -> usize {
+    (s % PHASES as u64) as usize
+}
+
+/// The index into [`CHANNELS`] of MIDI channel `ch`.
+fn channel_index(ch: u8) -> usize {
+    CHANNELS.iter().position(|&c| c == ch).unwrap_or(0)
+}
+
+/// The channel index, whole velocity and lead of a strike of `loudness` at sample `at`: the
+/// nearest to its level ([`voice_for`]) whose channel is not among those `busy` gives for
+/// the lane it would start on (its start: `at` less the lead `lead_of` gives for its
+/// velocity).
+fn voice(
+    loudness: f64,
+    at: u64,
+    mut lead_of: impl FnMut(u8) -> Result<u64, RenderError>,
+    busy: impl Fn(usize) -> Vec<usize>,
+) -> Result<(usize, u8, u64), RenderError> {
+    let mut not = Vec::new();
+    loop {
+        let (c, v) = voice_for(loudness, &not);
+        let lead = lead_of(v)?;
+        if not.len() + 1 >= CHANNELS.len() || !busy(lane_of(at.saturating_sub(lead))).contains(&c) {
+            return Ok((c, v, lead));
+        }
+        not.push(c);
+    }
+}
+
+/// Sets channel `ch` of `synth` to play `instrument` (bank select, program change): the
+/// next Note-On on it takes that preset; voices already sounding keep theirs.
+pub(crate) fn set_instrument(synth: &mut Synthesizer, ch: u8, instrument: Instrument) {
+    let (bank, program) = instrument.bank_and_program();
+    synth.process_midi_message(ch.into(), 0xB0, 0x00, bank.into());
+    synth.process_midi_message(ch.into(), 0xC0, program.into(), 0);
+}
+
 /// Renders `events` (in time order) with `font`, handing each chunk of samples (left,
 /// right) to `sink` in order.
 pub fn render(
@@ -236,55 +380,14 @@ pub fn render(
         });
     }
     let mut leads = Leads::new(font, rate, settings.gain);
-    // The events in time order; who holds each note's voice (its lane, channel and start);
-    // each lane's commands in its own samples, sorted by time below (a strike starts early by
-    // its lead, so a lane's commands do not come in the events' order).
-    let mut order: Vec<(u64, usize)> = events
-        .iter()
-        .enumerate()
-        .map(|(i, e)| (e.sample(rate), i))
-        .collect();
-    order.sort_unstable();
-    let mut holder: [Option<(usize, u8, u64)>; 128] = [None; 128];
-    let mut last_voice: [Option<(usize, usize)>; 128] = [None; 128];
-    let mut cmds: Vec<Vec<(u64, Cmd)>> = (0..PHASES).map(|_| Vec::new()).collect();
-    let mut out = Rendered::default();
-    let mut last = 0u64;
-    for &(at, i) in &order {
-        let e = &events[i];
-        let note = e.note & 0x7F;
-        let n = usize::from(note);
-        let start = match e.action {
-            Action::Strike { loudness } => {
-                let (mut c, mut v) = voice_for(loudness.get(), None);
-                let mut lead = leads.of(note, v)?;
-                // Never the synthesizer and channel of the key's previous strike.
-                let lane = |lead: u64| (at.saturating_sub(lead) % PHASES as u64) as usize;
-                if last_voice[n] == Some((lane(lead), c)) {
-                    (c, v) = voice_for(loudness.get(), Some(c));
-                    lead = leads.of(note, v)?;
-                }
-                last_voice[n] = Some((lane(lead), c));
-                out.lead_max = out.lead_max.max(lead);
-                Some((at.saturating_sub(lead), v, CHANNELS[c]))
-            }
-            Action::Release => None,
-        };
-        // The sound this key had ends at its key-up, or where a new strike begins.
-        if let Some((q, ch, began)) = holder[n].take() {
-            let off = start.map_or(at, |(s, _, _)| s).max(began);
-            cmds[q].push((off - q as u64, Cmd::Off(ch, note)));
-            last = last.max(off);
-        }
-        if let Some((begin, v, ch)) = start {
-            let p = (begin % PHASES as u64) as usize;
-            cmds[p].push((begin - p as u64, Cmd::On(ch, note, v)));
-            holder[n] = Some((p, ch, begin));
-            out.strikes += 1;
-        }
-        last = last.max(at);
-    }
-    for (lane, mut c) in lanes.iter_mut().zip(cmds) {
+    let plan = schedule(events, rate, &mut leads, &mut Classes::new(font))?;
+    let mut out = Rendered {
+        strikes: plan.strikes,
+        lead_max: plan.lead_max,
+        ..Rendered::default()
+    };
+    let (last, last_strike) = (plan.last, plan.last_strike);
+    for (lane, mut c) in lanes.iter_mut().zip(plan.cmds) {
         c.sort_by_key(|&(t, _)| t);
         lane.queue = c.into();
     }
@@ -327,7 +430,9 @@ pub fn render(
             }
         }
         let silent = left[..n].iter().chain(&right[..n]).all(|&x| x == 0.0);
-        if c > last && silent {
+        // Silence after the last strike: the end (a release still to come, such as a ring's
+        // end, has nothing left to stop).
+        if c > last_strike && silent {
             break;
         }
         for &x in left[..n].iter().chain(&right[..n]) {
@@ -357,10 +462,16 @@ impl Lane {
                 Some(&(t, _)) if t <= self.pos => {
                     let (_, cmd) = self.queue.pop_front().expect("front");
                     match cmd {
-                        Cmd::On(ch, note, v) => {
+                        Cmd::On(ch, note, v, instrument) => {
+                            set_instrument(&mut self.synth, ch, instrument);
                             self.synth.note_on(ch.into(), note.into(), v.into())
                         }
                         Cmd::Off(ch, note) => self.synth.note_off(ch.into(), note.into()),
+                        Cmd::Cut(ch, note, instrument) => {
+                            set_instrument(&mut self.synth, ch, instrument);
+                            self.synth
+                                .note_on(ch.into(), note.into(), SILENT_VELOCITY.into());
+                        }
                     }
                     continue;
                 }
@@ -413,10 +524,10 @@ mod tests {
         for i in 100..=12_700 {
             let loudness = f64::from(i) / 100.0;
             let exact = 40.0 * (synth_velocity(loudness) / 127.0).log10();
-            let (c, v) = voice_for(loudness, None);
+            let (c, v) = voice_for(loudness, &[]);
             worst = worst.max((level_db(c, v) - exact).abs());
             for not in 0..CHANNELS.len() {
-                let (c, v) = voice_for(loudness, Some(not));
+                let (c, v) = voice_for(loudness, &[not]);
                 assert_ne!(c, not);
                 worst_not = worst_not.max((level_db(c, v) - exact).abs());
             }
@@ -425,7 +536,7 @@ mod tests {
         assert!(worst_not < 0.08, "{worst_not} dB");
         // The loudest is velocity 127 at the default expression; whole velocities alone
         // would be up to 0.27 dB off.
-        assert_eq!(voice_for(127.0, None), (0, 127));
+        assert_eq!(voice_for(127.0, &[]), (0, 127));
         assert_eq!(expression(0), 127 << 7);
     }
 }

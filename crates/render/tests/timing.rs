@@ -265,11 +265,13 @@ fn a_strikes_level_follows_its_exact_loudness_between_whole_steps() {
         keys.push(events::KeyEvent {
             at_ns,
             note: 60,
+            instrument: events::Instrument::PIANO,
             action: events::Action::Strike { loudness },
         });
         keys.push(events::KeyEvent {
             at_ns: at_ns + 500_000_000,
             note: 60,
+            instrument: events::Instrument::PIANO,
             action: events::Action::Release,
         });
     }
@@ -303,4 +305,97 @@ fn a_strikes_level_follows_its_exact_loudness_between_whole_steps() {
     let spread = offsets.iter().copied().fold(f64::MIN, f64::max)
         - offsets.iter().copied().fold(f64::MAX, f64::min);
     assert!(spread < 0.08, "levels off their loudness by {offsets:?}");
+}
+
+#[test]
+fn a_ringing_output_sounds_past_its_key_up_until_it_strikes_again_or_for_eight_seconds() {
+    // One key struck at 0.3 s and 1.5 s, each held 0.1 s; the test font sustains until
+    // released. As a keyboard key it is silent between; as a bar it rings on.
+    let song = smf(&[(300, 60, 100, 100), (1500, 60, 100, 100)]);
+    let played = play(&song, orch_perform::thesis_config());
+    let keys = 61;
+    let render_as = |outputs: &[events::Output]| {
+        let keys = events::from_robot(&played.performance, played.start_us, outputs, &[]).unwrap();
+        let (mut l, mut r) = (Vec::new(), Vec::new());
+        synth::render(
+            &support::square_font(RATE),
+            &keys,
+            &Settings::default(),
+            |a, b| {
+                l.extend_from_slice(a);
+                r.extend_from_slice(b);
+                Ok(())
+            },
+        )
+        .unwrap();
+        (l, r)
+    };
+    let at = |ms: usize| ms * RATE as usize / 1000;
+    let (l, r) = render_as(&events::keyboard(36, keys));
+    assert_eq!(onset::rms(&l, &r, at(800), at(1400)), 0.0, "a key: damped");
+    let bars: Vec<events::Output> = (0..keys)
+        .map(|k| events::Output::bar(events::Instrument::Program(9), 36 + k as u8))
+        .collect();
+    let (l, r) = render_as(&bars);
+    let level = onset::rms(&l, &r, at(350), at(400));
+    for ms in [800, 1400, 9000] {
+        let now = onset::rms(&l, &r, at(ms), at(ms + 50));
+        assert!(
+            (now / level - 1.0).abs() < 0.01,
+            "at {ms} ms: {now} against {level}"
+        );
+    }
+    // Released 8 s after the last strike (9.5 s): gone within the font's release.
+    let sounded = (0..l.len()).rev().find(|&k| l[k] != 0.0).unwrap();
+    let ring_end = at(9500);
+    assert!(
+        sounded >= ring_end && sounded < ring_end + 64 + 331 + 64,
+        "the ring ends at sample {sounded}, 8 s after the strike at {ring_end}"
+    );
+}
+
+#[test]
+fn a_drums_release_does_not_touch_a_piano_key_of_the_same_note() {
+    // The piano's 60 held from 0 to 2 s; the drum kit's 60 from sample 22 080 (the same
+    // synthesizer: 345 blocks on) to 1 s. Both at full loudness, where the nearest channel
+    // is the same: the drum takes another, and its release leaves the piano sounding.
+    let strike = |at_ns: i64, instrument| events::KeyEvent {
+        at_ns,
+        note: 60,
+        instrument,
+        action: events::Action::Strike {
+            loudness: orch_render::Loudness::of_velocity(127),
+        },
+    };
+    let release = |at_ns: i64, instrument| events::KeyEvent {
+        action: events::Action::Release,
+        ..strike(at_ns, instrument)
+    };
+    let drum_at = (22_080.0 / f64::from(RATE) * 1e9).round() as i64;
+    let keys = [
+        strike(0, events::Instrument::PIANO),
+        strike(drum_at, events::Instrument::Drums),
+        release(1_000_000_000, events::Instrument::Drums),
+        release(2_000_000_000, events::Instrument::PIANO),
+    ];
+    assert_eq!(keys[1].sample(RATE) % synth::PHASES as u64, 0);
+    let (mut l, mut r) = (Vec::new(), Vec::new());
+    synth::render(
+        &support::square_font(RATE),
+        &keys,
+        &Settings::default(),
+        |a, b| {
+            l.extend_from_slice(a);
+            r.extend_from_slice(b);
+            Ok(())
+        },
+    )
+    .unwrap();
+    let at = |ms: usize| ms * RATE as usize / 1000;
+    let alone = onset::rms(&l, &r, at(100), at(400));
+    let after = onset::rms(&l, &r, at(1200), at(1900));
+    assert!(
+        (after / alone - 1.0).abs() < 0.01,
+        "the piano alone {alone}, after the drum's release {after}"
+    );
 }
