@@ -175,35 +175,29 @@ fn check(f: &Figures, prefix: &str) -> Result<(), RobotError> {
     Ok(())
 }
 
-impl StrikeFile {
-    fn written(&self) -> Written<'_> {
-        Written {
-            pulse_soft: &self.pulse_soft,
-            pulse_loud: &self.pulse_loud,
-            rebound: &self.rebound,
-            flight: &self.flight,
-            soft_flight: &self.soft_flight,
-            min_pulse: &self.min_pulse,
-            return_delay: &self.return_delay,
-            mute_after: &self.mute_after,
+/// The figure fields of a `[[strike]]` or `[[strike.output]]` table, which both have them (serde
+/// cannot flatten one struct into both while refusing unknown fields).
+macro_rules! written {
+    ($table:ty) => {
+        impl $table {
+            fn written(&self) -> Written<'_> {
+                Written {
+                    pulse_soft: &self.pulse_soft,
+                    pulse_loud: &self.pulse_loud,
+                    rebound: &self.rebound,
+                    flight: &self.flight,
+                    soft_flight: &self.soft_flight,
+                    min_pulse: &self.min_pulse,
+                    return_delay: &self.return_delay,
+                    mute_after: &self.mute_after,
+                }
+            }
         }
-    }
+    };
 }
 
-impl OutputFile {
-    fn written(&self) -> Written<'_> {
-        Written {
-            pulse_soft: &self.pulse_soft,
-            pulse_loud: &self.pulse_loud,
-            rebound: &self.rebound,
-            flight: &self.flight,
-            soft_flight: &self.soft_flight,
-            min_pulse: &self.min_pulse,
-            return_delay: &self.return_delay,
-            mute_after: &self.mute_after,
-        }
-    }
-}
+written!(StrikeFile);
+written!(OutputFile);
 
 /// The strike groups read: the core's [`Strikes`], the groups as the robot describes them,
 /// and their outputs' mechanics (by key).
