@@ -162,6 +162,10 @@ pub struct Interpreter<
     wake: Kept,
     #[cfg(feature = "stats")]
     stats: Stats,
+    /// Strike outputs (one bit a key) whose note's Note-Off came and whose damper fires once
+    /// their beater's pulse is over and no sustain pedal of their group holds.
+    #[cfg(feature = "strike")]
+    damp_due: [u8; 16],
     /// The duties last written to each board by [`flush_duties`](Self::flush_duties).
     #[cfg(feature = "dynamics")]
     duties: [[Duty; 16]; B],
@@ -236,6 +240,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             wake: Kept::NEVER,
             #[cfg(feature = "stats")]
             stats: NO_STATS,
+            #[cfg(feature = "strike")]
+            damp_due: [0; 16],
             #[cfg(feature = "dynamics")]
             duties: [[Duty::OFF; 16]; B],
         }
@@ -261,6 +267,8 @@ const NO_STATS: Stats = Stats {
     cut_by_hold_limit: 0,
     cut_by_duty_limit: 0,
     cut_by_watchdog: 0,
+    #[cfg(feature = "strike")]
+    extras_skipped: 0,
     peak_keys_down: 0,
 };
 
@@ -710,6 +718,10 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                     self.release_now(key, now);
                 } else if short && age >= min_press {
                     self.release_now(key, now);
+                    #[cfg(feature = "strike")]
+                    if let Some(limit) = self.try_damp(key, now) {
+                        soonest(limit);
+                    }
                 } else {
                     let mut limit = hold.unwrap_or(u32::MAX).min(duty.unwrap_or(u32::MAX));
                     if short {
@@ -1032,6 +1044,27 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         }
     }
 
+    /// Whether striking `key` at `velocity` now would pass the power budget (`busy`: the
+    /// key is down or waiting already, and its strike takes its place).
+    fn over_budget(&self, key: u8, velocity: Velocity, busy: bool) -> bool {
+        let g = self.config.guard;
+        #[cfg(feature = "dynamics")]
+        if self.by_current() {
+            // The budget is a current: every key's duty now, this strike's in place of the
+            // key's own if it is down or waiting.
+            let strike = self.config.dynamics.touch(key).strike_duty(velocity).get() as u32;
+            let rest = self.current()
+                - if busy {
+                    self.key_current(key) as u32
+                } else {
+                    0
+                };
+            return g.enabled && rest + strike > g.max_keys_down as u32 * Duty::FULL.get() as u32;
+        }
+        let _ = (key, velocity);
+        !busy && g.enabled && self.fingers.down + self.fingers.pending >= g.max_keys_down
+    }
+
     #[inline(always)]
     fn route(&self, channel: Channel, note: Note) -> Result<KeyOf, DropReason> {
         self.config.land(channel, note)
@@ -1086,6 +1119,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         if busy && self.is_strike(key) {
             // A strike arriving while its beater's pulse is on, or while it waits to strike,
             // is the same hit.
+            #[cfg(feature = "strike")]
+            self.set_damp_due(key, false);
             self.count_sounded(folded);
             self.count(|s| s.joined += 1);
             sink.note(NoteEvent::Joined {
@@ -1115,25 +1150,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         }
         // A fresh strike, or a re-strike of a key that is down (by the pedal, by this very
         // note again, or by another note under `Overlap::Restrike`) or waiting.
-        #[cfg(feature = "dynamics")]
-        let over_budget = if self.by_current() {
-            // The budget is a current: every key's duty now, this strike's in place of the
-            // key's own if it is down or waiting.
-            let strike = self.config.dynamics.touch(key).strike_duty(velocity).get() as u32;
-            let rest = self.current()
-                - if busy {
-                    self.key_current(key) as u32
-                } else {
-                    0
-                };
-            g.enabled && rest + strike > g.max_keys_down as u32 * Duty::FULL.get() as u32
-        } else {
-            !busy && g.enabled && self.fingers.down + self.fingers.pending >= g.max_keys_down
-        };
-        #[cfg(not(feature = "dynamics"))]
-        let over_budget =
-            !busy && g.enabled && self.fingers.down + self.fingers.pending >= g.max_keys_down;
-        if over_budget {
+        if self.over_budget(key, velocity, busy) {
             self.count(|s| s.dropped_power += 1);
             drop(sink, Some(at), DropReason::Power);
             return;
@@ -1155,6 +1172,19 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         if !self.is_strike(key) && !self.notes.insert(channel, note, key) {
             self.count(|s| s.dropped_power += 1);
             drop(sink, Some(at), DropReason::Power);
+            return;
+        }
+        // A new note on a bar: an earlier note's Note-Off no longer damps it.
+        #[cfg(feature = "strike")]
+        self.set_damp_due(key, false);
+        #[cfg(feature = "strike")]
+        if let Some((lead, time)) = self.lead_of(key, channel, note) {
+            // An open hi-hat: the lift fires now, the stick when the lift's time has passed
+            // (or its rebound, if that is later).
+            self.fire(lead, velocity, now);
+            self.fingers.set_velocity(key, velocity.get());
+            self.strike_after(key, folded, time.as_micros(), now);
+            sink.note(NoteEvent::Leading { channel, note, at });
             return;
         }
         if phase == PENDING {
@@ -1183,6 +1213,16 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     }
 
     fn note_off(&mut self, channel: Channel, note: Note, now: u32) {
+        #[cfg(feature = "strike")]
+        if let Ok(KeyOf { key, .. }) = self.route(channel, note) {
+            if self.is_strike(key) {
+                if self.config.strikes.damper(key).is_some() {
+                    self.set_damp_due(key, true);
+                    self.try_damp(key, now);
+                }
+                return;
+            }
+        }
         let pedal = self.config.sustain && self.pedals & channel.bit() != 0;
         let was_on = if pedal {
             // The pedal holds the note (and its key) until it goes up.
@@ -1204,6 +1244,16 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         self.pedals &= !channel.bit();
         self.notes.release_sustained(channel);
         self.release_unheld(now);
+        #[cfg(feature = "strike")]
+        for byte in 0..self.damp_due.len() {
+            // Only bars whose Note-Off came wait for the pedal: one bit a key.
+            let mut bits = self.damp_due[byte];
+            while bits != 0 {
+                let key = (byte * 8) as u8 + bits.trailing_zeros() as u8;
+                bits &= bits - 1;
+                self.try_damp(key, now);
+            }
+        }
     }
 
     /// Switches off every note of `channel`. All Sound Off (`sound_off`) lets go of the
@@ -1238,6 +1288,10 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     fn release_everything<S: NoteSink>(&mut self, now: u32, why: DropReason, sink: &mut S) {
         self.notes.clear();
         self.pedals = 0;
+        #[cfg(feature = "strike")]
+        {
+            self.damp_due = [0; 16];
+        }
         // Only keys down or waiting have anything to release or cancel.
         let mut from = 0;
         while let Some(key) = self.fingers.next_timed(from) {
@@ -1282,19 +1336,100 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         } else {
             self.count_sounded(folded);
             self.press_now(key, now);
-            let mut limit = g
-                .max_hold
-                .map_or(u32::MAX, Duration::as_micros)
-                .min(self.duty_cut_after(key).unwrap_or(u32::MAX))
-                .min(self.strike_end(key));
-            if self.is_strike(key) {
-                limit = limit.min(self.press_len(key));
-            }
-            if g.enabled && limit != u32::MAX {
-                self.due = self.due.min(now.wrapping_add(limit));
-            }
+            self.arm(key, now);
             true
         }
+    }
+
+    /// Sets the guard's next deadline for `key`, pressed now; returns it, in µs from now
+    /// (`u32::MAX`: none).
+    fn arm(&mut self, key: u8, now: u32) -> u32 {
+        let g = self.config.guard;
+        let mut limit = g
+            .max_hold
+            .map_or(u32::MAX, Duration::as_micros)
+            .min(self.duty_cut_after(key).unwrap_or(u32::MAX))
+            .min(self.strike_end(key));
+        if self.is_strike(key) {
+            limit = limit.min(self.press_len(key));
+        }
+        if g.enabled && limit != u32::MAX {
+            self.due = self.due.min(now.wrapping_add(limit));
+        }
+        limit
+    }
+
+    /// The lead output of a note that strikes `key`, and its lead time.
+    #[cfg(feature = "strike")]
+    fn lead_of(&self, key: u8, channel: Channel, note: Note) -> Option<(u8, Duration)> {
+        if !self.is_strike(key) || !self.config.guard.enabled {
+            return None;
+        }
+        self.config.strikes.lead(channel, note)
+    }
+
+    /// Fires `out` (a lead or a damper: no note's) for its pulse now, if its rebound has
+    /// passed and the power budget allows; else counts it skipped. Returns its deadline, in
+    /// µs from now.
+    #[cfg(feature = "strike")]
+    fn fire(&mut self, out: u8, velocity: Velocity, now: u32) -> Option<u32> {
+        let phase = self.fingers.phase(out);
+        let rested = phase == crate::fingers::READY
+            || (phase == RELEASING && self.fingers.age(out, now) >= self.rest(out));
+        if !rested || self.over_budget(out, velocity, false) {
+            self.count(|s| s.extras_skipped += 1);
+            return None;
+        }
+        self.fingers.set_velocity(out, velocity.get());
+        self.press_now(out, now);
+        Some(self.arm(out, now))
+    }
+
+    /// Makes strike output `key` (up) strike `delay` µs from now, or when its rebound is
+    /// over if that is later: it waits as a re-strike does (`PENDING`), stamped so that its
+    /// rest ends then. The stamp moves no earlier than the last strike's, so the key's
+    /// cooling is never overstated.
+    #[cfg(feature = "strike")]
+    fn strike_after(&mut self, key: u8, folded: bool, delay: u32, now: u32) {
+        let rest = self.rest(key);
+        let wait = match self.fingers.phase(key) {
+            RELEASING => rest.saturating_sub(self.fingers.age(key, now)),
+            _ => 0,
+        };
+        let delay = delay.max(wait).min(rest);
+        self.fingers
+            .enter(key, PENDING, now.wrapping_sub(rest - delay));
+        self.fingers.set_flag(key, FOLDED, folded);
+        self.due = self.due.min(now.wrapping_add(delay));
+    }
+
+    /// Marks `key`'s damper as due (its note's Note-Off came) or not.
+    #[cfg(feature = "strike")]
+    fn set_damp_due(&mut self, key: u8, due: bool) {
+        let (byte, bit) = (key as usize / 8 % 16, 1u8 << (key % 8));
+        if due {
+            self.damp_due[byte] |= bit;
+        } else {
+            self.damp_due[byte] &= !bit;
+        }
+    }
+
+    /// Fires `key`'s damper if it is due, its beater is off and no sustain pedal of its
+    /// group holds. Returns the damper's deadline, in µs from now, if it fired.
+    #[cfg(feature = "strike")]
+    fn try_damp(&mut self, key: u8, now: u32) -> Option<u32> {
+        let (byte, bit) = (key as usize / 8 % 16, 1u8 << (key % 8));
+        if self.damp_due[byte] & bit == 0 || matches!(self.fingers.phase(key), DOWN | PENDING) {
+            return None;
+        }
+        let strikes = &self.config.strikes;
+        let channels = strikes.group_of(key).map_or(0, |g| g.channels.0);
+        if self.config.sustain && self.pedals & channels != 0 {
+            return None;
+        }
+        let damper = strikes.damper(key)?;
+        self.damp_due[byte] &= !bit;
+        self.fire(damper, Velocity::MAX, now)
     }
 
     fn count_sounded(&mut self, folded: bool) {
@@ -1318,6 +1453,11 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         if self.is_strike(key) {
             // A strike's pulse ends by itself, whatever its note does.
             self.fingers.set_flag(key, RELEASE_AFTER, true);
+            // A bar's damper is never on while its beater strikes.
+            #[cfg(feature = "strike")]
+            if let Some(d) = self.config.strikes.damper(key) {
+                self.release_now(d, now);
+            }
         }
         if let Some(f) = self.config.layout.finger(key) {
             self.frame.set(f.board, f.bit, true);

@@ -55,10 +55,10 @@
 //! | the configuration (none with a constant one: [`Thesis`]) | 68 |
 //! | the statistics and the decoder's counters (feature `stats`, off on the ATmega16) | 88 (+8 padding) |
 //! | dynamics (feature `dynamics`, off on the ATmega16): the configuration's per-key [`Touch`] table and strike time (772), the duties last written to 4 boards (128) | 900 |
-//! | strike groups (feature `strike`, off on the ATmega16): every key's pulse (1536), the sparse groups' note maps (512) and the groups, in the configuration | 2088 |
+//! | strike groups (feature `strike`, off on the ATmega16): every key's pulse (1536), the sparse groups' note maps (512) and leads (512), the lead times (512), the dampers (128) and the groups, in the configuration; the dampers due (16) and the skipped count | 3260 |
 //! | `Interpreter<4, 61, NotePool<32>>` without `duty-limit` and `stats` | 616 |
 //! | **`Interpreter<4, 61, NotePool<32>, Thesis>` without `duty-limit` and `stats`: the ATmega16 build** | **544** |
-//! | **[`Interpreter`] with [`NoteTable`], the duty limit, the statistics, dynamics and strike groups: the host's** | **4228** |
+//! | **[`Interpreter`] with [`NoteTable`], the duty limit, the statistics, dynamics and strike groups: the host's** | **5400** |
 //!
 //! AVR has no padding, so the ATmega16 figure is a few bytes lower (536). The [`Decoder`]
 //! alone takes 12 bytes (28 with `stats`).
@@ -91,8 +91,8 @@
 //!   configuration in RAM (its per-key table), 128 with a constant one. Without it every key
 //!   is on/off. The ATmega16 firmware builds without it.
 //! - `strike` (default): strike groups beside or instead of the keyboard (drums, mallets:
-//!   [`strike`]), pulses that end by themselves. 2088 bytes of configuration in RAM, none with
-//!   a constant one. The ATmega16 firmware builds without it.
+//!   [`strike`]), pulses that end by themselves, leads (an open hi-hat's lift) and dampers. 3260
+//!   bytes of RAM with a configuration in RAM, 20 with a constant one. The ATmega16 firmware builds without it.
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]

@@ -102,6 +102,17 @@ pub enum NoteEvent {
         /// Its key.
         at: Landing,
     },
+    /// The note's lead output fired now (an open hi-hat's lift): the note strikes its own
+    /// output when the lead time has passed ([`NoteEvent::WaitOver`]) unless it is
+    /// cancelled ([`NoteEvent::WaitEnded`]).
+    Leading {
+        /// The note's channel.
+        channel: Channel,
+        /// The note.
+        note: Note,
+        /// Its key (the output it strikes, not the lead).
+        at: Landing,
+    },
     /// Another note holds the key already (down, or about to strike): this one sounds with
     /// it and makes no strike of its own.
     Joined {

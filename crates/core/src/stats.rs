@@ -73,6 +73,11 @@ pub struct Stats {
     /// Keys down when the watchdog or missing Active Sensing released everything, summed
     /// over every time it fired (strikes still waiting are counted in `dropped_cancelled`).
     pub cut_by_watchdog: u32,
+    /// Lead and damper pulses not fired (no note's: an open hi-hat's lift, a bar's damper):
+    /// their output was still within its rebound, or the power budget was full. The note
+    /// itself is counted as any other.
+    #[cfg(feature = "strike")]
+    pub extras_skipped: u32,
     /// The most keys down at once (powered; strikes waiting for their gap are not down).
     pub peak_keys_down: u8,
 }

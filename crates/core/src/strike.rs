@@ -127,6 +127,19 @@ impl StrikeGroup {
 }
 
 /// A robot's strike groups and the pulse of each of their outputs.
+///
+/// Beside the outputs notes strike, a group may have:
+///
+/// - **lead** outputs ([`set_lead`](Self::set_lead)): a note with a lead fires it first and
+///   strikes its own output the lead output's [`lead time`](Self::lead_times) later (an
+///   open hi-hat: the lift opens the cymbals, then the stick strikes them);
+/// - **dampers** ([`set_damper`](Self::set_damper)): an output fired at the Note-Off of a
+///   note that struck its bar, once the beater's pulse is over and not while the channel's
+///   sustain pedal holds (then when it goes up). A bar's damper is never on while its beater
+///   strikes: a strike cuts its damper's pulse.
+///
+/// Lead and damper outputs are outputs of their group like any other (a pitched group's
+/// come after its range: [`add_outputs`](Self::add_outputs)), with their own pulse.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Strikes {
     /// Whether the robot has a keyboard (`Config::range`'s keys, first in the layout). Without
@@ -139,6 +152,15 @@ pub struct Strikes {
     /// The sparse groups' note maps: `map[g][note]` is the output (a key) plus one, 0 for
     /// none.
     pub map: [[u8; 128]; MAX_STRIKE_GROUPS],
+    /// The sparse groups' leads: `leads[g][note]` is the output (a key) plus one that fires
+    /// before the note's own, 0 for none.
+    pub leads: [[u8; 128]; MAX_STRIKE_GROUPS],
+    /// Every lead output's lead time: how long before the note's own output it fires (the
+    /// lift's travel). Below the rebound of every output it leads.
+    pub lead_times: [Duration; 128],
+    /// Every output's damper: `dampers[key]` is the damper output (a key) plus one, 0 for
+    /// none.
+    pub dampers: [u8; 128],
     /// Every key's pulse; [`Pulse::NONE`] for a keyboard key.
     pub pulses: [Pulse; 128],
 }
@@ -150,6 +172,9 @@ impl Strikes {
         groups: [StrikeGroup::EMPTY; MAX_STRIKE_GROUPS],
         count: 0,
         map: [[0; 128]; MAX_STRIKE_GROUPS],
+        leads: [[0; 128]; MAX_STRIKE_GROUPS],
+        lead_times: [Duration::ZERO; 128],
+        dampers: [0; 128],
         pulses: [Pulse::NONE; 128],
     };
 
@@ -279,11 +304,68 @@ impl Strikes {
         Ok(())
     }
 
+    /// Adds `count` outputs with `pulse` after the last group's (it must have one): a
+    /// pitched group's dampers, say. Returns the first new output's key.
+    pub fn add_outputs(&mut self, count: usize, pulse: Pulse) -> Result<u8, StrikeError> {
+        let Some(g) = (self.count as usize).checked_sub(1) else {
+            return Err(StrikeError::Span { group: 0 });
+        };
+        let group = &mut self.groups[g];
+        let first = group.first as usize + group.outputs as usize;
+        if count == 0 || first + count > self.pulses.len() {
+            return Err(StrikeError::Span { group: g as u8 });
+        }
+        group.outputs += count as u8;
+        for p in &mut self.pulses[first..first + count] {
+            *p = pulse;
+        }
+        Ok(first as u8)
+    }
+
+    /// Makes `note` of sparse group `group` fire `lead` (an output) `time` before its own
+    /// output: an open hi-hat's lift. Checked by [`validate`](Self::validate).
+    pub fn set_lead(&mut self, group: usize, note: Note, lead: u8, time: Duration) {
+        if let (Some(leads), Some(t)) = (
+            self.leads.get_mut(group),
+            self.lead_times.get_mut(lead as usize),
+        ) {
+            leads[note.get() as usize] = lead.wrapping_add(1);
+            *t = time;
+        }
+    }
+
+    /// Gives `output` the damper `damper` (another output), fired at its notes' Note-Offs.
+    /// Checked by [`validate`](Self::validate).
+    pub fn set_damper(&mut self, output: u8, damper: u8) {
+        if let Some(d) = self.dampers.get_mut(output as usize) {
+            *d = damper.wrapping_add(1);
+        }
+    }
+
+    /// The lead of a note on `channel`: the output that fires first and how long before
+    /// the note's own, if the note's group gives it one.
+    pub fn lead(&self, channel: Channel, note: Note) -> Option<(u8, Duration)> {
+        let (g, _) = self.find_in(channel, note)?.ok()?;
+        let lead = self.leads[g][note.get() as usize].checked_sub(1)?;
+        Some((lead, self.lead_times[lead as usize]))
+    }
+
+    /// The damper of `output`, if it has one.
+    #[inline]
+    pub fn damper(&self, output: u8) -> Option<u8> {
+        self.dampers.get(output as usize)?.checked_sub(1)
+    }
+
     /// Where a note on `channel` goes: `Some(Ok(key))` to a strike group's output, `Some(Err(reason))`
     /// if some strike group listens to the channel but none has an output for it (and the
     /// keyboard does not take it: see [`Config::land`](crate::Config::land)), `None` if no
     /// strike group listens.
     pub fn find(&self, channel: Channel, note: Note) -> Option<Result<KeyOf, StrikeMiss>> {
+        self.find_in(channel, note).map(|r| r.map(|(_, of)| of))
+    }
+
+    /// [`find`](Self::find), with the group found.
+    fn find_in(&self, channel: Channel, note: Note) -> Option<Result<(usize, KeyOf), StrikeMiss>> {
         let mut miss = None;
         for (g, group) in self.groups().iter().enumerate() {
             if !group.channels.contains(channel) {
@@ -293,18 +375,24 @@ impl Strikes {
                 StrikeNotes::Sparse => match self.map[g][note.get() as usize] {
                     0 => miss = Some(StrikeMiss::Unmapped),
                     k => {
-                        return Some(Ok(KeyOf {
-                            key: k - 1,
-                            octaves: 0,
-                        }))
+                        return Some(Ok((
+                            g,
+                            KeyOf {
+                                key: k - 1,
+                                octaves: 0,
+                            },
+                        )))
                     }
                 },
                 StrikeNotes::Range(range, policy) => match range.key_for(note, policy) {
                     Some(of) => {
-                        return Some(Ok(KeyOf {
-                            key: group.first + of.key,
-                            octaves: of.octaves,
-                        }))
+                        return Some(Ok((
+                            g,
+                            KeyOf {
+                                key: group.first + of.key,
+                                octaves: of.octaves,
+                            },
+                        )))
                     }
                     None => miss = miss.or(Some(StrikeMiss::Range)),
                 },
@@ -348,8 +436,23 @@ impl Strikes {
                     }
                 }
                 StrikeNotes::Range(range, _) => {
-                    if range.keys() != group.outputs as usize {
+                    if range.keys() > group.outputs as usize
+                        || self.leads[g].iter().any(|&k| k != 0)
+                    {
                         return Err(StrikeError::Span { group: group_no });
+                    }
+                }
+            }
+            self.validate_leads(g, span.clone())?;
+            for key in span.clone() {
+                if let Some(d) = self.damper(key) {
+                    let shared = span.clone().any(|k| k != key && self.damper(k) == Some(d));
+                    if !span.contains(&d)
+                        || self.plays_notes(g, d)
+                        || self.damper(d).is_some()
+                        || shared
+                    {
+                        return Err(StrikeError::Damper { key });
                     }
                 }
             }
@@ -368,6 +471,44 @@ impl Strikes {
         }
         if self.pulses[..first].iter().any(Pulse::is_strike) {
             return Err(StrikeError::Pulse { key: 0 });
+        }
+        Ok(())
+    }
+}
+
+impl Strikes {
+    /// Whether notes strike `key` in group `g` (a lead or a damper has no notes of its own).
+    fn plays_notes(&self, g: usize, key: u8) -> bool {
+        match self.groups[g].notes {
+            StrikeNotes::Sparse => self.map[g].contains(&key.wrapping_add(1)),
+            StrikeNotes::Range(range, _) => (key - self.groups[g].first) < range.keys() as u8,
+        }
+    }
+
+    /// The group `key` is an output of.
+    pub fn group_of(&self, key: u8) -> Option<&StrikeGroup> {
+        self.groups()
+            .iter()
+            .find(|g| (g.first..g.first + g.outputs).contains(&key))
+    }
+
+    /// Group `g`'s leads: each an output of the group, not the note's own, with a lead time
+    /// above 0 and below the rebound of the output it leads.
+    fn validate_leads(&self, g: usize, span: core::ops::Range<u8>) -> Result<(), StrikeError> {
+        for (note, &lead) in self.leads[g].iter().enumerate() {
+            let Some(lead) = lead.checked_sub(1) else {
+                continue;
+            };
+            let own = self.map[g][note].checked_sub(1);
+            let time = self.lead_times[lead as usize];
+            let fits = own.is_some_and(|own| {
+                !self.plays_notes(g, lead)
+                    && time > Duration::ZERO
+                    && time < self.pulse(own).rebound
+            });
+            if !span.contains(&lead) || !fits {
+                return Err(StrikeError::Lead { note: note as u8 });
+            }
         }
         Ok(())
     }
@@ -429,6 +570,18 @@ pub enum StrikeError {
         /// The key.
         key: u8,
     },
+    /// A note's lead is not an output of its group with no notes of its own, or has no lead
+    /// time or one not below the rebound of the note's output.
+    Lead {
+        /// The note.
+        note: u8,
+    },
+    /// An output's damper is not another output of its group with no notes of its own, has a
+    /// damper of its own, or damps another output too.
+    Damper {
+        /// The key.
+        key: u8,
+    },
 }
 
 impl core::fmt::Display for StrikeError {
@@ -462,6 +615,14 @@ impl core::fmt::Display for StrikeError {
             StrikeError::Rebound { key } => {
                 write!(f, "key {key}: the rebound is shorter than the loud pulse")
             }
+            StrikeError::Lead { note } => write!(
+                f,
+                "note {note}: its lead must be an output of its group with no notes of its own, with a lead time above 0 and below the rebound of the note's output"
+            ),
+            StrikeError::Damper { key } => write!(
+                f,
+                "key {key}: its damper must be another output of its group, one with no notes, no damper of its own and no other output to damp"
+            ),
         }
     }
 }

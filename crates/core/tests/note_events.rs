@@ -53,6 +53,7 @@ impl Rig {
                 let k = match e {
                     NoteEvent::Struck { .. } => "struck",
                     NoteEvent::Waiting { .. } => "waiting",
+                    NoteEvent::Leading { .. } => "leading",
                     NoteEvent::Joined {
                         with_strike: true, ..
                     } => "unison",

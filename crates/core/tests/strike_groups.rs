@@ -162,6 +162,7 @@ fn a_roll_faster_than_the_rebound_keeps_the_rebound() {
             e,
             NoteEvent::Struck { .. }
                 | NoteEvent::Waiting { .. }
+                | NoteEvent::Leading { .. }
                 | NoteEvent::Joined { .. }
                 | NoteEvent::Dropped { .. }
         )

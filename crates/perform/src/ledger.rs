@@ -121,6 +121,9 @@ pub struct Ledger {
     /// Per key: the note whose strike it is, and the note waiting to strike.
     owner: Vec<Option<NoteId>>,
     waiting: Vec<Option<NoteId>>,
+    /// Per key: whether the note waiting waits for its lead (an open hi-hat's lift), not for
+    /// a re-strike's rest.
+    leading: Vec<bool>,
     /// Per key: strikes (note, instant) not yet matched to a press, oldest first.
     strikes: Vec<VecDeque<(NoteId, u64)>>,
     restrikes_waited: u64,
@@ -132,6 +135,7 @@ impl Ledger {
         Self {
             owner: vec![None; keys],
             waiting: vec![None; keys],
+            leading: vec![false; keys],
             strikes: vec![VecDeque::new(); keys],
             ..Self::default()
         }
@@ -205,13 +209,15 @@ impl Ledger {
                 self.entry(id).landing = Some(at);
                 self.strike(id, at.key, t_us);
             }
-            NoteEvent::Waiting { at, .. } => {
+            NoteEvent::Waiting { at, .. } | NoteEvent::Leading { at, .. } => {
                 let Some(id) = self.in_flight.pop_front() else {
                     return;
                 };
                 self.entry(id).landing = Some(at);
-                if let Some(w) = self.waiting.get_mut(at.key as usize) {
+                let k = at.key as usize;
+                if let (Some(w), Some(l)) = (self.waiting.get_mut(k), self.leading.get_mut(k)) {
                     *w = Some(id);
+                    *l = matches!(event, NoteEvent::Leading { .. });
                 }
             }
             NoteEvent::Joined {
@@ -247,7 +253,9 @@ impl Ledger {
             }
             NoteEvent::WaitOver { key } => {
                 if let Some(id) = self.waiting.get_mut(key as usize).and_then(Option::take) {
-                    self.restrikes_waited += 1;
+                    if !self.leading[key as usize] {
+                        self.restrikes_waited += 1;
+                    }
                     self.strike(id, key, t_us);
                 }
             }
