@@ -84,6 +84,25 @@ impl KeyMap {
     pub fn strikes(&self, key: usize) -> bool {
         u8::try_from(key).is_ok_and(|k| self.0.is_strike(k))
     }
+
+    /// How long before its own output a note's lead output fires (an open hi-hat's lift), µs;
+    /// 0 for a note with no lead. The interpreter strikes the note's output that much after
+    /// the Note-On, so the planner sends it that much earlier.
+    pub fn lead_us(&self, channel: u8, note: u8) -> u64 {
+        let (Some(c), Some(n)) = (Channel::new(channel), Note::new(note)) else {
+            return 0;
+        };
+        self.0
+            .strikes
+            .lead(c, n)
+            .map_or(0, |(_, t)| t.as_micros() as u64)
+    }
+
+    /// The longest lead time of any note, µs.
+    pub fn max_lead_us(&self) -> u64 {
+        let times = self.0.strikes.lead_times.iter();
+        times.map(|t| t.as_micros() as u64).max().unwrap_or(0)
+    }
 }
 
 /// What the planner needs to know about the robot.
@@ -293,7 +312,8 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         let keys = rules.press_lead_us.len().max(rules.release_lead_us.len());
         let lead = |v: &[u64]| v.iter().copied().max().unwrap_or(0);
         let lookahead = if rules.compensation {
-            (rules.max_press_lead() + rules.restrike_gap_us).max(lead(&rules.release_lead_us))
+            (rules.max_press_lead() + rules.keys.max_lead_us() + rules.restrike_gap_us)
+                .max(lead(&rules.release_lead_us))
                 + rules.extra_lookahead_us
         } else {
             0
@@ -726,8 +746,11 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         let velocity = bytes.note_on().map_or(0, |(_, _, v)| v);
         let lead = self.rules.press_lead(k, velocity) as i64;
         if self.rules.keys.strikes(k) {
-            // A strike: sent early by its flight; the interpreter keeps the beater's rebound
-            // (a strike too soon waits, joins or is dropped as too fast there).
+            // A strike: sent early by its flight, and by its lead's time if it has one (the
+            // interpreter fires the lead, then the strike that much later); the interpreter
+            // keeps the beater's rebound (a strike too soon waits, joins or is dropped as too
+            // fast there).
+            let lead = lead + self.rules.keys.lead_us(ch, n) as i64;
             let at = self.after_controller(ch, w - lead);
             self.send(at, bytes, Some(id), w);
             self.mark(ch, k, at);

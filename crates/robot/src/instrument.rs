@@ -59,13 +59,13 @@ const DRUMS_TOML: &str = r#"# orch robot configuration (robot.toml): a General M
 [keys]
 enabled = false
 
-# One board drives the kit's nine outputs, in the order of the [[strike.output]] tables:
-# output 0 (the kick) on bit 0, output 8 (the ride) on bit 8. kind: "pca9555": on/off, velocity
+# One board drives the kit's ten outputs, in the order of the [[strike.output]] tables:
+# output 0 (the kick) on bit 0, output 9 (the hi-hat's lift) on bit 9. kind: "pca9555": on/off, velocity
 # played as the pulse's length; "pca9685": velocity as the pulse's length and its duty.
 [[boards]]
 kind = "pca9555"
 address = 0x21
-keys = 9
+keys = 10
 first_bit = 0
 
 # A strike group: each note fires its output for a pulse that ends by itself, whatever the
@@ -86,7 +86,12 @@ first_bit = 0
 #     rest on the head for at most 15 ms (the kick's 30 ms pulse less its 15 ms flight).
 # Each [[strike.output]] names its notes (General MIDI's drum map) and may give any of those
 # figures where it differs from the group's. A note the kit has no output for is dropped as
-# "unmapped".
+# "unmapped". An output with no notes of its own is either
+#   a lead: `leads` lists the notes it fires before their own output, `lead` how long before
+#     (the open hi-hat's lift below), or
+#   a damper: `damps` names the output whose notes' Note-Offs fire it (a cymbal's choke), once
+#     that output's pulse is over and not while the channel's sustain pedal holds (when
+#     [keys] sustain is on). A strike of its drum cuts its pulse.
 [[strike]]
 name = "drums"
 channels = [10]
@@ -148,6 +153,18 @@ notes = [51, 59]          # ride cymbals 1 and 2
 pulse_soft = "10ms"
 pulse_loud = "25ms"
 rebound = "50ms"
+
+# The open hi-hat (46) lifts the top cymbal off the bottom one before the stick strikes
+# (crunchysteve/SoleBot fires two outputs for it): the lift fires 15 ms (its travel) before
+# the stick, and holds the hats apart 60 ms, through the stick's flight and the open ring.
+# The performer sends the note early by the lead too, so the stick still sounds on the beat.
+[[strike.output]]
+name = "hi-hat lift"
+leads = [46]
+lead = "15ms"
+pulse_soft = "60ms"
+pulse_loud = "60ms"
+rebound = "80ms"
 "#;
 
 /// The glockenspiel.
@@ -188,6 +205,10 @@ first_bit = 0
 #   mute_after: the longest a mallet may stay powered on its bar once it struck: a bar rings
 #     only when the mallet leaves it, and the loudest pulse here rests on it 6 ms.
 # program: the General MIDI program `orch render` plays it with (10: glockenspiel).
+# damper_pulse: give it (such as "20ms") for a glockenspiel with a damper on each bar
+# (versioduo's glockenspiel-37 has them): one more output a bar, after the bars on the boards,
+# fired for that pulse at the bar's Note-Off, once its beater's pulse is over and not while
+# the sustain pedal holds (when [keys] sustain is on). None here: a glockenspiel rings on.
 [[strike]]
 name = "glockenspiel"
 channels = "melodic"
@@ -274,6 +295,7 @@ mod tests {
             "high tom",
             "crash",
             "ride",
+            "hi-hat lift",
         ] {
             assert!(named.contains(&drum), "{drum}");
         }

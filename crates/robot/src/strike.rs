@@ -8,6 +8,8 @@ use serde::Deserialize;
 use crate::file::{channels, delay, int, Policy};
 use crate::{Group, GroupKind, RobotError};
 
+mod extras;
+
 /// One `[[strike]]` table.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -29,6 +31,9 @@ pub(crate) struct StrikeFile {
     min_pulse: Option<String>,
     return_delay: Option<String>,
     mute_after: Option<String>,
+    /// A pitched group's dampers: one a bar, after the bars, each fired for this pulse at
+    /// its bar's Note-Off.
+    damper_pulse: Option<String>,
     #[serde(default)]
     output: Vec<OutputFile>,
 }
@@ -43,7 +48,15 @@ fn all_channels() -> toml::Value {
 #[serde(deny_unknown_fields)]
 pub(crate) struct OutputFile {
     name: Option<String>,
+    #[serde(default)]
     notes: Vec<i64>,
+    /// The notes this output fires before their own output (an open hi-hat's lift).
+    #[serde(default)]
+    leads: Vec<i64>,
+    /// How long before their own output it fires them.
+    lead: Option<String>,
+    /// The output (by name) whose notes' Note-Offs fire this one: its damper.
+    damps: Option<String>,
     pulse_soft: Option<String>,
     pulse_loud: Option<String>,
     rebound: Option<String>,
@@ -56,9 +69,9 @@ pub(crate) struct OutputFile {
 
 /// An output's figures: its pulse (core) and its beater's mechanics (virtual robot).
 #[derive(Clone, Copy)]
-struct Figures {
-    pulse: Pulse,
-    mechanics: KeyMechanics,
+pub(crate) struct Figures {
+    pub pulse: Pulse,
+    pub mechanics: KeyMechanics,
 }
 
 /// The figures a field left out takes: a drum's (see `Pulse::DRUM` and the text
@@ -288,18 +301,41 @@ fn kit(
             "a drum kit plays General MIDI's drum kit; program is for a pitched group",
         ));
     }
+    if file.damper_pulse.is_some() {
+        return Err(RobotError::field(
+            format!("{prefix}damper_pulse"),
+            "a pitched group's dampers; a kit's damper is a [[strike.output]] with damps = \"its drum\"",
+        ));
+    }
     let mut outputs = Vec::new();
     let mut notes_of = Vec::new();
     let mut seen = [None::<usize>; 128];
     for (i, out) in file.output.iter().enumerate() {
         let oprefix = format!("{prefix}output[{i}].");
         let figures = out.written().over(group_figures, &oprefix)?;
-        if out.notes.is_empty() {
+        let extra = !out.leads.is_empty() || out.lead.is_some() || out.damps.is_some();
+        if out.notes.is_empty() != extra {
             return Err(RobotError::field(
                 format!("{oprefix}notes"),
-                "[]: an output plays at least one note",
+                if extra {
+                    "a lead or a damper (leads, damps) plays no notes of its own"
+                } else {
+                    "[]: an output plays at least one note, or leads some (leads) or damps one (damps)"
+                },
             ));
         }
+        let figures = if extra {
+            // A lift or a damper does not touch a head or a bar: nothing to mute.
+            Figures {
+                mechanics: KeyMechanics {
+                    mute_after: None,
+                    ..figures.mechanics
+                },
+                ..figures
+            }
+        } else {
+            figures
+        };
         let mut notes = Vec::new();
         for (j, &n) in out.notes.iter().enumerate() {
             let note = int(&format!("{oprefix}notes[{j}]"), n, 0, 127, "a MIDI note")?;
@@ -325,6 +361,7 @@ fn kit(
     read.strikes
         .push_kit(mask, first, &list)
         .map_err(|e| RobotError::field(format!("{prefix}output"), e.to_string()))?;
+    extras::kit_extras(read, file, g, first, &outputs)?;
     Ok(Group {
         name: String::new(),
         kind: GroupKind::Kit,
@@ -380,12 +417,19 @@ fn pitched(
     for k in 0..range.keys() {
         read.mechanics.push(((first + k) as u8, figures.mechanics));
     }
+    let mut outputs: Vec<String> = (lo..=hi).map(crate::note_name).collect();
+    let mut notes: Vec<Vec<u8>> = (lo..=hi).map(|n| vec![n]).collect();
+    if let Some(text) = &file.damper_pulse {
+        let names = extras::bar_dampers(read, text, &prefix, first, range.keys(), figures)?;
+        outputs.extend(names);
+        notes.resize(outputs.len(), Vec::new());
+    }
     Ok(Group {
         name: String::new(),
         kind: GroupKind::Pitched,
         first: first as u8,
-        outputs: (lo..=hi).map(crate::note_name).collect(),
-        notes: (lo..=hi).map(|n| vec![n]).collect(),
+        outputs,
+        notes,
         program: Some(program),
     })
 }

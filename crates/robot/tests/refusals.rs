@@ -224,3 +224,78 @@ fn a_piano_with_a_drum_kit_on_channel_10_numbers_the_kits_outputs_after_the_keys
     assert_eq!(robot.mechanics.for_key(12).press_delay.as_micros(), 10_000);
     assert_eq!(robot.mechanics.for_key(3).press_delay.as_micros(), 15_000);
 }
+
+/// A kit of kick, hi-hat (42, 46) and a third output with `third` as its table, on one board.
+fn kit_with(third: &str) -> String {
+    format!(
+        "[keys]\nenabled = false\n[[boards]]\naddress = 0x21\nkeys = 3\n[[strike]]\nchannels = [10]\n\
+         [[strike.output]]\nname = \"kick\"\nnotes = [36]\n\
+         [[strike.output]]\nname = \"hi-hat\"\nnotes = [42, 46]\n\
+         [[strike.output]]\nname = \"extra\"\n{third}\n"
+    )
+}
+
+#[test]
+fn a_lift_leads_its_notes_and_a_damper_damps_its_drum() {
+    let robot = Robot::from_toml(&kit_with("leads = [46]\nlead = \"12ms\"")).unwrap();
+    let c = robot.config;
+    let ch = orch_core::Channel::new(9).unwrap();
+    let lead = c.strikes.lead(ch, orch_core::Note::from_bits(46));
+    assert_eq!(lead, Some((2, orch_core::Duration::from_millis(12))));
+    assert_eq!(c.strikes.lead(ch, orch_core::Note::from_bits(42)), None);
+    // A lift touches no head: nothing to mute.
+    assert_eq!(robot.mechanics.for_key(2).mute_after, None);
+    let robot = Robot::from_toml(&kit_with("damps = \"hi-hat\"")).unwrap();
+    assert_eq!(robot.config.strikes.damper(1), Some(2));
+    assert!(robot.interpreter().is_ok());
+}
+
+#[test]
+fn a_glockenspiel_with_dampers_has_one_after_the_bars_for_each() {
+    let text = "[keys]\nenabled = false\n[[boards]]\naddress = 0x21\nkeys = 16\n\
+                [[strike]]\nlow = 72\nhigh = 79\ndamper_pulse = \"20ms\"\n";
+    let robot = Robot::from_toml(text).unwrap();
+    let g = &robot.groups[0];
+    assert_eq!(g.outputs.len(), 16);
+    assert_eq!(g.outputs[8], "C5 damper");
+    assert!(g.notes[8].is_empty());
+    for bar in 0..8u8 {
+        assert_eq!(robot.config.strikes.damper(bar), Some(8 + bar));
+    }
+    assert!(robot.interpreter().is_ok());
+    // The boards must drive the dampers too.
+    let e = Robot::from_toml(&text.replace("keys = 16", "keys = 8")).unwrap_err();
+    assert_eq!(e.field_name(), Some("boards"), "{e}");
+}
+
+#[test]
+fn leads_and_dampers_that_cannot_work_are_refused_naming_the_field() {
+    let cases = [
+        (kit_with("leads = [46]"), "strike[0].output[2].lead"),
+        (kit_with("lead = \"10ms\""), "strike[0].output[2].leads"),
+        // As long as the hi-hat's rebound (40 ms): the stick could not wait for it.
+        (
+            kit_with("leads = [46]\nlead = \"40ms\""),
+            "strike[0].output[2].lead",
+        ),
+        (
+            kit_with("leads = [50]\nlead = \"10ms\""),
+            "strike[0].output[2].leads[0]",
+        ),
+        (
+            kit_with("notes = [49]\nleads = [46]\nlead = \"10ms\""),
+            "strike[0].output[2].notes",
+        ),
+        (kit_with("damps = \"ride\""), "strike[0].output[2].damps"),
+        (kit_with(""), "strike[0].output[2].notes"),
+        (
+            kit_with("damps = \"kick\"")
+                .replace("[[strike]]", "[[strike]]\ndamper_pulse = \"9ms\""),
+            "strike[0].damper_pulse",
+        ),
+    ];
+    for (text, field) in cases {
+        let e = Robot::from_toml(&text).expect_err(&text);
+        assert_eq!(e.field_name(), Some(field), "{e:#}\n{text}");
+    }
+}
