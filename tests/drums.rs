@@ -61,7 +61,7 @@ fn piano_and_drums() -> String {
     let start = kit.find("[[strike]]").unwrap();
     let end = kit.find("\n# The I2C bus").unwrap();
     format!(
-        "{}\n[[boards]]\nkind = \"pca9555\"\naddress = 0x25\nkeys = 9\n\n{}",
+        "{}\n[[boards]]\nkind = \"pca9555\"\naddress = 0x25\nkeys = 10\n\n{}",
         config(&[]),
         &kit[start..end]
     )
@@ -123,11 +123,30 @@ fn assert_account_is_the_report(what: &str, report: &Value, lines: &[Value]) {
     assert_eq!(n(&report["unmatched"]), 0, "{what}");
 }
 
-/// Every output that went on went off again within `max_us`, and nothing is on at the end.
-fn assert_no_output_on_longer_than(what: &str, writes: &[Value], outputs: &[u8], max_us: u64) {
+/// The kit's longest pulse by output (its bit on the kit's board): the kick's 30 ms for a
+/// beater, 60 ms for the hi-hat's lift (bit 9).
+fn kit_pulse_us(bit: u32) -> u64 {
+    if bit == LIFT_BIT {
+        60_000
+    } else {
+        30_000
+    }
+}
+
+/// The hi-hat lift's bit on the kit's board.
+const LIFT_BIT: u32 = 9;
+
+/// Every output that went on went off again within its `max_us`, and nothing is on at the
+/// end. Returns how many pulses each bit had.
+fn assert_no_output_on_longer_than(
+    what: &str,
+    writes: &[Value],
+    outputs: &[u8],
+    max_us: fn(u32) -> u64,
+) -> HashMap<u32, u64> {
     let mut last: HashMap<u64, u64> = HashMap::new();
     let mut since: HashMap<(u64, u32), u64> = HashMap::new();
-    let mut longest = 0;
+    let mut pulses: HashMap<u32, u64> = HashMap::new();
     for w in writes {
         let (address, t) = (w["address"].as_u64().unwrap(), w["t_us"].as_u64().unwrap());
         if !outputs.contains(&(address as u8)) {
@@ -141,15 +160,18 @@ fn assert_no_output_on_longer_than(what: &str, writes: &[Value], outputs: &[u8],
                 since.insert((address, bit), t);
             } else if !on && before {
                 let t0 = since.remove(&(address, bit)).unwrap();
-                longest = longest.max(t - t0);
+                assert!(
+                    t - t0 <= max_us(bit),
+                    "{what}: output {bit} of 0x{address:x} on {} µs > {}",
+                    t - t0,
+                    max_us(bit)
+                );
+                *pulses.entry(bit).or_default() += 1;
             }
         }
     }
     assert!(since.is_empty(), "{what}: outputs left on: {since:?}");
-    assert!(
-        longest <= max_us,
-        "{what}: an output on {longest} µs > {max_us}"
-    );
+    pulses
 }
 
 /// What a channel-10 note may become on a robot with a kit: struck, or dropped for a reason
@@ -174,13 +196,30 @@ fn the_drum_kit_plays_every_corpus_drum_part_honestly() {
     let kit = dir.join("kit.toml");
     std::fs::write(&kit, config(&["--instrument", "drums"])).unwrap();
     let (mut struck, mut notes, mut on_time) = (0, 0, 0);
+    let (mut open_hats, mut lifts) = (0, 0);
     for file in drum_files() {
         let (report, lines, writes) = play(&kit, &file, &dir);
         assert_account_is_the_report(&file, &report, &lines);
         assert_eq!(report["muted"], 0, "{file}: no beater rests on its head");
         assert_eq!(report["too_short_to_sound"], 0, "{file}: no blank");
-        // The kit's board is 0x21; its loudest pulse (the kick's) is 30 ms.
-        assert_no_output_on_longer_than(&file, &writes, &[0x21], 30_000);
+        // The kit's board is 0x21; its loudest pulse (the kick's) is 30 ms, its lift's 60.
+        let pulses = assert_no_output_on_longer_than(&file, &writes, &[0x21], kit_pulse_us);
+        // Every open hi-hat struck fired its lift first (unless the lift was still up from
+        // the one before: then it is skipped, and the hats are still open).
+        let open = lines
+            .iter()
+            .filter(|l| l["channel"] == 10 && l["note"] == 46);
+        let open = open.filter(|l| matches!(l["outcome"].as_str(), Some("on_time" | "late")));
+        let (n, lifted) = (
+            open.count() as u64,
+            pulses.get(&LIFT_BIT).copied().unwrap_or(0),
+        );
+        assert!(
+            lifted <= n && (n == 0) == (lifted == 0),
+            "{file}: {n} open, {lifted} lifts"
+        );
+        open_hats += n;
+        lifts += lifted;
         assert_drum_notes_struck_or_mechanical(&file, &lines);
         for l in &lines {
             if l["channel"] != 10 {
@@ -195,7 +234,11 @@ fn the_drum_kit_plays_every_corpus_drum_part_honestly() {
             .count();
         on_time += drums.filter(|l| l["outcome"] == "on_time").count();
     }
-    eprintln!("drum notes {notes}: struck {struck}, on time {on_time}");
+    eprintln!("drum notes {notes}: struck {struck}, on time {on_time}; open hi-hats {open_hats}, lifts {lifts}");
+    assert!(
+        open_hats > 0 && lifts * 10 >= open_hats * 9,
+        "{lifts} lifts for {open_hats} open hi-hats"
+    );
     assert!(struck * 10 >= notes * 7, "{struck} of {notes} struck");
     assert!(
         on_time * 100 >= struck * 99,
@@ -215,7 +258,7 @@ fn a_piano_with_a_drum_kit_plays_both_parts_and_a_piano_alone_leaves_the_drums()
         let what = format!("{file} on piano + drums");
         assert_account_is_the_report(&what, &report, &lines);
         assert_drum_notes_struck_or_mechanical(&what, &lines);
-        assert_no_output_on_longer_than(&what, &writes, &[0x25], 30_000);
+        assert_no_output_on_longer_than(&what, &writes, &[0x25], kit_pulse_us);
         // The piano alone: every drum note is dropped as percussion, never played as a pitch.
         let (report, lines, _) = play(&piano, &file, &dir);
         let what = format!("{file} on the piano");

@@ -350,6 +350,17 @@ impl Strikes {
         Some((lead, self.lead_times[lead as usize]))
     }
 
+    /// Whether `key` is a lead or a damper: an output no note strikes itself.
+    pub fn is_extra(&self, key: u8) -> bool {
+        let k = key.wrapping_add(1);
+        self.dampers.contains(&k)
+            || self
+                .groups()
+                .iter()
+                .enumerate()
+                .any(|(g, _)| self.leads[g].contains(&k))
+    }
+
     /// The damper of `output`, if it has one.
     #[inline]
     pub fn damper(&self, output: u8) -> Option<u8> {

@@ -370,6 +370,9 @@ pub struct Played {
     pub replayed: u64,
     /// Per key: whether velocity is played there (a PWM key), for the velocity error.
     pub dynamic_keys: Vec<bool>,
+    /// Per key: whether it is a lead or a damper (an open hi-hat's lift, a bar's damper): an
+    /// output no note strikes itself, whose presses are not notes' strikes.
+    pub extra_keys: Vec<bool>,
 }
 
 impl Played {
@@ -387,12 +390,18 @@ impl Played {
         let bus = self.performance.summary.bus;
         let span = self.end_us.saturating_sub(self.start_us).max(1) as f64;
         let s = &self.stats;
+        let extra = |e: &&orch_sim::SoundEvent| {
+            e.kind == orch_sim::SoundKind::Down
+                && self.extra_keys.get(usize::from(e.key)) == Some(&true)
+        };
+        let lifts_and_dampers = self.performance.sounds.iter().filter(extra).count() as u64;
         Report {
             notes: (self.records.len() as u64).saturating_sub(self.replayed),
             jumps: self.jumps,
             replayed: self.replayed,
             outcomes,
-            strikes: m.clean_onsets + m.smeared_onsets,
+            strikes: m.clean_onsets + m.smeared_onsets - lifts_and_dampers,
+            lifts_and_dampers,
             unmatched,
             folded: folded_by_octaves.values().sum(),
             folded_by_octaves,
@@ -864,6 +873,9 @@ where
         replayed: u64::from(offset),
         dynamic_keys: (0..setup.config.keys())
             .map(|k| !setup.config.dynamics.touch(k as u8).is_full())
+            .collect(),
+        extra_keys: (0..setup.config.keys())
+            .map(|k| setup.config.strikes.is_extra(k as u8))
             .collect(),
     })
 }

@@ -245,8 +245,11 @@ pub struct Report {
     pub replayed: u64,
     /// What became of them: one count per outcome.
     pub outcomes: Outcomes,
-    /// Key-down sounds of the virtual robot.
+    /// Key-down sounds of the virtual robot: the notes' strikes (lifts and dampers apart).
     pub strikes: u64,
+    /// Presses of lead outputs (an open hi-hat's lift) and dampers on the virtual robot: no
+    /// note's own strike. With `strikes`, every key-down of the virtual robot.
+    pub lifts_and_dampers: u64,
     /// Notes that struck but made no sound (must be 0).
     pub unmatched: u64,
     /// Notes folded into the keys, whatever became of them.
@@ -367,6 +370,12 @@ impl Report {
             ));
         }
         line(format!("strikes heard          {}", self.strikes));
+        if self.lifts_and_dampers > 0 {
+            line(format!(
+                "lifts and dampers      {}   (outputs no note strikes: an open hi-hat's lift, a damper)",
+                self.lifts_and_dampers
+            ));
+        }
         line(format!(
             "folded                 {}{}",
             self.folded,
