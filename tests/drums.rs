@@ -341,7 +341,17 @@ fn the_roll_draws_drums_on_their_own_rows_and_folded_bars_on_the_bars() {
             "{instrument}: strikes drawn"
         );
         assert_eq!(text.contains("class=\"fold\""), folds, "{instrument}");
+        // Struck notes are drawn as hits at their start, not as bars of their length.
+        assert!(text.contains("class=\"score hit\""), "{instrument}");
+        // A kit's drums on lanes named as the kit names them; bars on their pitches.
+        let lanes = ["kick", "snare", "hi-hat", "crash", "ride", "not in the kit"];
+        for lane in lanes {
+            let named = text.contains(&format!("data-lane=\"{lane}\""));
+            assert_eq!(named, !folds, "{instrument}: lane {lane}");
+        }
+        std::fs::copy(&svg, dir.join(format!("{instrument}.svg"))).unwrap();
     }
+    eprintln!("rolls in {}", dir.display());
 }
 
 #[test]

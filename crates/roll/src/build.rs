@@ -49,32 +49,86 @@ impl fmt::Display for BuildError {
 
 impl std::error::Error for BuildError {}
 
-/// Where each of the robot's outputs is drawn: the pitch rows of its keys.
+/// How one of the robot's outputs is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputRow {
+    /// A key held while its note sounds, on its pitch's row.
+    Key(u8),
+    /// A bar struck (a glockenspiel's), on its pitch's row, drawn as hits.
+    Bar(u8),
+    /// A drum of a kit, on its named lane ([`Rows::lanes`]), drawn as hits.
+    Drum(u16),
+    /// An output no note strikes itself (a lift, a damper): not drawn.
+    None,
+}
+
+/// Where each of the robot's outputs is drawn: the pitch rows of its keys and bars, and the
+/// named lanes of its drums.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Rows {
-    /// The robot's lowest and highest row, as MIDI notes (shaded as its keys).
-    pub keys: (u8, u8),
-    /// Each output's row, by output (key) index: `Some(note)` for a key or a bar of its
-    /// own pitch, `None` for a drum (a kit's output plays several notes: a strike is drawn on
-    /// the row of the note written). Outputs past the list are keys from `keys.0` up.
-    pub note_of: Vec<Option<u8>>,
+    /// The robot's lowest and highest pitch row, as MIDI notes (shaded as its keys);
+    /// `None` for a robot with no keys or bars (a drum kit alone).
+    pub keys: Option<(u8, u8)>,
+    /// Each output's row, by output (key) index. Outputs past the list are keys from
+    /// `keys.0` up.
+    pub outputs: Vec<OutputRow>,
+    /// The named lanes, top to bottom (a kit's drums).
+    pub lanes: Vec<String>,
+    /// The channels (bit 0 = channel 1) a kit listens to: a note on one of them that no
+    /// output plays (a drum the kit lacks) is drawn on the last lane, "not in the kit",
+    /// added for it.
+    pub drum_channels: u16,
 }
+
+/// Where one note is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Place {
+    /// The pitch row of the key or bar it landed on, if it is drawn on one.
+    pub landed: Option<u8>,
+    /// Its lane, if it is drawn on one.
+    pub lane: Option<u16>,
+    /// Struck, not held.
+    pub hit: bool,
+}
+
+/// The lane a kit's note with no output of its own is drawn on.
+pub const NOT_IN_THE_KIT: &str = "not in the kit";
 
 impl Rows {
     /// A keyboard of the MIDI notes `keys.0..=keys.1`: output `k` is note `keys.0 + k`.
     pub fn keyboard(keys: (u8, u8)) -> Self {
         Self {
-            keys,
-            note_of: Vec::new(),
+            keys: Some(keys),
+            ..Self::default()
         }
     }
 
-    /// The row of a note written `written` that landed on output `key`.
-    pub fn landed(&self, key: u8, written: u8) -> u8 {
-        match self.note_of.get(key as usize) {
-            Some(Some(note)) => *note,
-            Some(None) => written,
-            None => self.keys.0.saturating_add(key),
+    /// Where a note written `written` on `channel` (1..=16) that landed on output `key`
+    /// (`None`: on no output) is drawn.
+    pub fn place(&self, key: Option<u8>, channel: u8, written: u8) -> Place {
+        let pitch = |landed, hit| Place {
+            landed: Some(landed),
+            lane: None,
+            hit,
+        };
+        let Some(key) = key else {
+            let drum = channel >= 1 && self.drum_channels & (1 << (channel - 1)) != 0;
+            return Place {
+                landed: None,
+                lane: drum.then_some(self.lanes.len() as u16),
+                hit: drum,
+            };
+        };
+        match self.outputs.get(key as usize) {
+            Some(OutputRow::Key(note)) => pitch(*note, false),
+            Some(OutputRow::Bar(note)) => pitch(*note, true),
+            Some(OutputRow::Drum(lane)) => Place {
+                landed: None,
+                lane: Some(*lane),
+                hit: true,
+            },
+            Some(OutputRow::None) => pitch(written, true),
+            None => pitch(self.keys.map_or(0, |k| k.0).saturating_add(key), false),
         }
     }
 }
@@ -100,7 +154,6 @@ pub fn roll_on(
     tempo: f64,
     title: &str,
 ) -> Result<Roll, BuildError> {
-    let keys = rows.keys;
     if played.jumps > 0 || played.replayed > 0 {
         return Err(BuildError::Jumped);
     }
@@ -147,6 +200,7 @@ pub fn roll_on(
             }
             _ => None,
         };
+        let place = rows.place(line.key, line.channel, line.note);
         notes.push(RollNote {
             t_ms: line.t_ms,
             end_ms: line.t_ms + length_ms,
@@ -155,11 +209,19 @@ pub fn roll_on(
             note: line.note,
             channel: line.channel,
             velocity: line.velocity,
-            landed: line.key.map(|k| rows.landed(k, line.note)),
+            landed: place.landed,
             outcome,
             strike,
+            lane: place.lane,
+            hit: place.hit,
         });
     }
+    let mut lanes = rows.lanes.clone();
+    if notes.iter().any(|n| n.lane == Some(lanes.len() as u16)) {
+        lanes.push(NOT_IN_THE_KIT.to_string());
+    }
+    let pitched = rows.keys.is_some() || notes.iter().any(|n| n.lane.is_none());
+    let keys = rows.keys.map(|(a, b)| (a.min(b), a.max(b)));
     // The drawing runs on to the line that closes the last bar.
     let last_bar = song.bar_beat(song.duration_us().saturating_sub(1)).0;
     if let Some(close) = song.bar_start_us(last_bar.saturating_add(1)) {
@@ -181,6 +243,8 @@ pub fn roll_on(
         end_ms,
         keys,
         dynamics: played.dynamic_keys.iter().any(|d| *d),
+        lanes,
+        pitched,
     })
 }
 
@@ -228,5 +292,78 @@ impl KeyUps {
         };
         let up = next(self.ups.get(k)).unwrap_or(self.end);
         next(self.downs.get(k)).map_or(up, |d| up.min(d))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two keys (C4, C#4), a bar (G5), a kit of kick and snare on channel 10, and a lift.
+    fn rows() -> Rows {
+        Rows {
+            keys: Some((60, 61)),
+            outputs: vec![
+                OutputRow::Key(60),
+                OutputRow::Key(61),
+                OutputRow::Bar(79),
+                OutputRow::Drum(1),
+                OutputRow::Drum(0),
+                OutputRow::None,
+            ],
+            lanes: vec!["snare".into(), "kick".into()],
+            drum_channels: 1 << 9,
+        }
+    }
+
+    #[test]
+    fn keys_and_bars_go_on_their_pitch_and_drums_on_their_lanes() {
+        let r = rows();
+        let place = |key, channel, note| r.place(key, channel, note);
+        assert_eq!(
+            place(Some(1), 1, 73),
+            Place {
+                landed: Some(61),
+                lane: None,
+                hit: false
+            }
+        );
+        assert_eq!(
+            place(Some(2), 1, 67),
+            Place {
+                landed: Some(79),
+                lane: None,
+                hit: true
+            }
+        );
+        assert_eq!(
+            place(Some(3), 10, 36),
+            Place {
+                landed: None,
+                lane: Some(1),
+                hit: true
+            }
+        );
+        // A drum the kit lacks: the lane after the kit's, "not in the kit".
+        assert_eq!(
+            place(None, 10, 81),
+            Place {
+                landed: None,
+                lane: Some(2),
+                hit: true
+            }
+        );
+        // A note on no output elsewhere stays on its written pitch's row.
+        assert_eq!(
+            place(None, 1, 20),
+            Place {
+                landed: None,
+                lane: None,
+                hit: false
+            }
+        );
+        // A keyboard alone: output k is note low + k.
+        let keys = Rows::keyboard((36, 96));
+        assert_eq!(keys.place(Some(24), 1, 60).landed, Some(60));
     }
 }

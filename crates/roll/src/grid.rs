@@ -2,7 +2,7 @@
 //! octave lines, the note names and the bar lines with their numbers.
 
 use crate::colour::{is_black, note_name};
-use crate::layout::{Layout, Row, LEFT};
+use crate::layout::{Layout, Row};
 use crate::model::{BarLine, Roll};
 use crate::svg::{a, num, Writer};
 
@@ -27,7 +27,7 @@ pub fn rows(w: &mut Writer, roll: &Roll, l: &Layout) {
             "text",
             &[
                 a("class", "time"),
-                a("x", num(LEFT - 7.0)),
+                a("x", num(l.left - 7.0)),
                 a("y", num(row.top - 4.0)),
                 a("text-anchor", "end"),
                 a("font-size", "9"),
@@ -42,9 +42,9 @@ pub fn rows(w: &mut Writer, roll: &Roll, l: &Layout) {
 }
 
 fn lanes(w: &mut Writer, roll: &Roll, l: &Layout, row: &Row) {
-    let x0 = LEFT;
+    let x0 = l.left;
     let width = (row.to_ms - row.from_ms) * l.px_per_ms;
-    let h = l.pitch_height();
+    let h = l.area_height();
     w.empty(
         "rect",
         &[
@@ -58,8 +58,58 @@ fn lanes(w: &mut Writer, roll: &Roll, l: &Layout, row: &Row) {
             a("stroke-width", "0.5"),
         ],
     );
-    // The robot's keys.
-    let (klo, khi) = (roll.keys.0.min(roll.keys.1), roll.keys.0.max(roll.keys.1));
+    if l.pitched {
+        pitch_rows(w, roll, l, row);
+    }
+    named_lanes(w, roll, l, row);
+}
+
+/// The named lanes below the pitch rows (a kit's drums): every other one shaded, each named
+/// in the margin.
+fn named_lanes(w: &mut Writer, roll: &Roll, l: &Layout, row: &Row) {
+    let (x0, width) = (l.left, (row.to_ms - row.from_ms) * l.px_per_ms);
+    for (i, name) in roll.lanes.iter().enumerate() {
+        let y = l.lane_y(row, i as u16);
+        w.empty(
+            "rect",
+            &[
+                a("class", "lane"),
+                a("data-lane", name),
+                a("x", num(x0)),
+                a("y", num(y)),
+                a("width", num(width)),
+                a("height", num(l.lane_px)),
+                a("fill", if i % 2 == 0 { "#eef3e6" } else { "#ffffff" }),
+                a("stroke", "#c8c8c8"),
+                a("stroke-width", "0.5"),
+            ],
+        );
+        w.text(
+            "text",
+            &[
+                a("class", "lane-name"),
+                a("x", num(x0 - 7.0)),
+                a("y", num(y + l.lane_px / 2.0 + 3.0)),
+                a("text-anchor", "end"),
+                a("font-size", "9"),
+                a("fill", "#444444"),
+            ],
+            name,
+        );
+    }
+}
+
+/// The pitch rows: the robot's keys shaded, black keys striped, octaves ruled, C named.
+fn pitch_rows(w: &mut Writer, roll: &Roll, l: &Layout, row: &Row) {
+    if let Some(keys) = roll.keys {
+        keys_shade(w, l, row, keys);
+    }
+    pitch_lines(w, l, row);
+}
+
+/// The robot's keys `klo..=khi` shaded, and their span on the axis.
+fn keys_shade(w: &mut Writer, l: &Layout, row: &Row, (klo, khi): (u8, u8)) {
+    let (x0, width) = (l.left, (row.to_ms - row.from_ms) * l.px_per_ms);
     let ky = l.y(row, khi);
     let kh = f64::from(khi - klo + 1) * l.semitone;
     w.empty(
@@ -88,7 +138,12 @@ fn lanes(w: &mut Writer, roll: &Roll, l: &Layout, row: &Row) {
             a("fill", "#3b7dc4"),
         ],
     );
-    // Black keys striped, octaves (each B–C boundary) ruled: one path each.
+}
+
+/// Black keys striped, octaves (each B–C boundary) ruled, each C named.
+fn pitch_lines(w: &mut Writer, l: &Layout, row: &Row) {
+    let (x0, width) = (l.left, (row.to_ms - row.from_ms) * l.px_per_ms);
+    // One path each.
     let mut black = String::new();
     let mut octaves = String::new();
     for n in l.lo..=l.hi {
@@ -169,7 +224,7 @@ fn bars(w: &mut Writer, bars: &[BarLine], l: &Layout, row: &Row, i: usize, step:
                 a("x1", num(x)),
                 a("y1", num(row.top - 3.0)),
                 a("x2", num(x)),
-                a("y2", num(row.top + l.pitch_height())),
+                a("y2", num(row.top + l.area_height())),
                 a("stroke", "#8a8a8a"),
                 a("stroke-width", "0.7"),
             ],

@@ -6,7 +6,7 @@
 //! bottom to top, one [`Options::semitone_px`] a semitone, over the same notes in every row:
 //! the robot's keys and every note written or landed, one semitone of room either side.
 
-use crate::model::Roll;
+use crate::model::{Roll, RollNote};
 
 /// The scale of the drawing.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -39,6 +39,8 @@ pub const RIGHT: f64 = 12.0;
 pub const ROW_HEAD: f64 = 16.0;
 /// Below each row.
 pub const ROW_GAP: f64 = 14.0;
+/// A named lane's height, in semitones' heights.
+pub const LANE_SEMITONES: f64 = 2.0;
 
 /// One row: a stretch of time.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,6 +61,13 @@ pub struct Layout {
     pub hi: u8,
     pub px_per_ms: f64,
     pub semitone: f64,
+    /// Whether a row has pitch rows (see [`Roll::pitched`]).
+    pub pitched: bool,
+    /// The named lanes below the pitch rows, and each one's height, px.
+    pub lanes: usize,
+    pub lane_px: f64,
+    /// Left of the time axis: the note names, or the lanes' names if longer.
+    pub left: f64,
     pub width: f64,
     pub height: f64,
 }
@@ -71,7 +80,12 @@ impl Layout {
         let end = roll.end_ms.max(1000.0);
         let (lo, hi) = pitch_span(roll);
         let semitone = opts.semitone_px.max(1.0);
-        let pitch_h = f64::from(hi - lo + 1) * semitone;
+        let lane_px = semitone * LANE_SEMITONES;
+        let pitch_h = if roll.pitched {
+            f64::from(hi - lo + 1) * semitone
+        } else {
+            0.0
+        } + roll.lanes.len() as f64 * lane_px;
         let bars: Vec<f64> = roll.bars.iter().map(|b| b.t_ms).collect();
         let mut y = top;
         let rows: Vec<Row> = split_rows(&bars, end, max_ms)
@@ -86,6 +100,14 @@ impl Layout {
                 r
             })
             .collect();
+        // A lane's name at 9 px: about 5 px a character.
+        let longest = roll
+            .lanes
+            .iter()
+            .map(|n| n.chars().count())
+            .max()
+            .unwrap_or(0);
+        let left = LEFT.max(longest as f64 * 5.0 + 12.0);
         let widest = rows
             .iter()
             .map(|r| (r.to_ms - r.from_ms) * px_per_ms)
@@ -96,14 +118,42 @@ impl Layout {
             hi,
             px_per_ms,
             semitone,
-            width: LEFT + widest + RIGHT,
+            pitched: roll.pitched,
+            lanes: roll.lanes.len(),
+            lane_px,
+            left,
+            width: left + widest + RIGHT,
             height: y,
         }
     }
 
-    /// The height of a row's pitch area.
+    /// The height of a row's pitch rows (0 without them).
     pub fn pitch_height(&self) -> f64 {
-        f64::from(self.hi - self.lo + 1) * self.semitone
+        if self.pitched {
+            f64::from(self.hi - self.lo + 1) * self.semitone
+        } else {
+            0.0
+        }
+    }
+
+    /// The height of a row's drawing area: its pitch rows and its lanes.
+    pub fn area_height(&self) -> f64 {
+        self.pitch_height() + self.lanes as f64 * self.lane_px
+    }
+
+    /// The top of lane `lane` in `row`.
+    pub fn lane_y(&self, row: &Row, lane: u16) -> f64 {
+        row.top + self.pitch_height() + f64::from(lane) * self.lane_px
+    }
+
+    /// Where `n` is drawn in `row`, top and height: its strike's place (`strike`: the key or
+    /// bar it landed on) or its written note's, or its lane for both.
+    pub fn band(&self, row: &Row, n: &RollNote, strike: bool) -> (f64, f64) {
+        match n.lane {
+            Some(lane) => (self.lane_y(row, lane), self.lane_px),
+            None if strike => (self.y(row, n.landed.unwrap_or(n.note)), self.semitone),
+            None => (self.y(row, n.note), self.semitone),
+        }
     }
 
     /// The top of `note`'s lane in `row`.
@@ -113,7 +163,7 @@ impl Layout {
 
     /// The x of `t_ms` in `row`.
     pub fn x(&self, row: &Row, t_ms: f64) -> f64 {
-        LEFT + (t_ms - row.from_ms) * self.px_per_ms
+        self.left + (t_ms - row.from_ms) * self.px_per_ms
     }
 
     /// The parts of `from_ms..to_ms` in each row it crosses: (row, from, to).
@@ -136,12 +186,15 @@ impl Layout {
 /// The notes of the pitch axis: the robot's keys and every note written or landed, one
 /// semitone of room either side.
 fn pitch_span(roll: &Roll) -> (u8, u8) {
-    let (mut lo, mut hi) = (roll.keys.0.min(roll.keys.1), roll.keys.0.max(roll.keys.1));
-    for n in &roll.notes {
+    let (mut lo, mut hi) = roll.keys.unwrap_or((u8::MAX, 0));
+    for n in roll.notes.iter().filter(|n| n.lane.is_none()) {
         for p in std::iter::once(n.note).chain(n.landed) {
             lo = lo.min(p);
             hi = hi.max(p);
         }
+    }
+    if lo > hi {
+        return (59, 61); // nothing on pitch rows: a span that draws nothing
     }
     (lo.saturating_sub(1), hi.saturating_add(1).min(127))
 }

@@ -104,14 +104,15 @@ pub fn legend(w: &mut Writer, roll: &Roll) {
         );
     }
     x = label(w, x + 40.0, y, &format!("late 1 → {LATE_FULL_MS:.0}+ ms")) + 14.0;
-    let (lo, hi) = (roll.keys.0.min(roll.keys.1), roll.keys.0.max(roll.keys.1));
-    swatch(w, x, y, "#dbe8f6", "#3b7dc4", None);
-    x = label(
-        w,
-        x + 20.0,
-        y,
-        &format!("the robot's keys {}–{}", note_name(lo), note_name(hi)),
-    ) + 14.0;
+    if let Some((lo, hi)) = roll.keys {
+        swatch(w, x, y, "#dbe8f6", "#3b7dc4", None);
+        x = label(
+            w,
+            x + 20.0,
+            y,
+            &format!("the robot's keys {}–{}", note_name(lo), note_name(hi)),
+        ) + 14.0;
+    }
     if roll.dynamics {
         for (i, v) in [1u8, 64, 127].into_iter().enumerate() {
             let op = 0.2 + 0.8 * f64::from(v) / 127.0;
@@ -129,11 +130,16 @@ pub fn legend(w: &mut Writer, roll: &Roll) {
         }
         label(w, x + 34.0, y, "fill opacity: loudness, velocity 1 → 127");
     }
+    let hits = if roll.notes.iter().any(|n| n.hit) {
+        " (a struck drum or bar: a short outline at its start)"
+    } else {
+        ""
+    };
     label(
         w,
         8.0,
         y + 17.0,
-        "outline: the score's note, Note-On to Note-Off · fill: the robot's strike, sounded to key up · hover a note for its account",
+        &format!("outline: the score's note, Note-On to Note-Off{hits} · fill: the robot's strike, sounded to key up · hover a note for its account"),
     );
     w.close("g");
 }

@@ -68,11 +68,14 @@
 //!         t_ms: 0.0, end_ms: 500.0, bar: 1, beat: 1, note: 60, channel: 1, velocity: 100,
 //!         landed: Some(60), outcome: Outcome::Late,
 //!         strike: Some(Strike { sounded_ms: 12.0, up_ms: 530.0, onset_ms: 12.0, velocity: Some(127) }),
+//!         lane: None, hit: false,
 //!     }],
 //!     bars: vec![BarLine { bar: 1, t_ms: 0.0 }],
 //!     end_ms: 2000.0,
-//!     keys: (36, 96),
+//!     keys: Some((36, 96)),
 //!     dynamics: false,
+//!     lanes: Vec::new(),
+//!     pitched: true,
 //! };
 //! let svg = render(&roll, &Options::default());
 //! assert!(svg.contains(r#"class="note late""#));

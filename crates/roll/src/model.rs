@@ -111,6 +111,12 @@ pub struct RollNote {
     pub outcome: Outcome,
     /// Its own strike, if it had one that sounded.
     pub strike: Option<Strike>,
+    /// The named lane it is drawn on (a drum of a kit: [`Roll::lanes`]), instead of its
+    /// pitch's row.
+    pub lane: Option<u16>,
+    /// Struck, not held (a drum, a bar): its outline is a hit at its start, whatever its
+    /// Note-Off says.
+    pub hit: bool,
 }
 
 /// A bar line.
@@ -134,7 +140,13 @@ pub struct Roll {
     /// Where the drawing ends, ms (the song's end, or a later key-up).
     pub end_ms: f64,
     /// The robot's lowest and highest key, as MIDI notes (36..=96 on the thesis's robot).
-    pub keys: (u8, u8),
+    /// `None` for a robot with no keys or bars (a drum kit alone).
+    pub keys: Option<(u8, u8)>,
     /// Whether the robot plays velocity (PWM boards): then each strike's loudness is drawn.
     pub dynamics: bool,
+    /// Named lanes below the pitch rows, top to bottom: a drum kit's drums (kick, snare…).
+    pub lanes: Vec<String>,
+    /// Whether the drawing has pitch rows: false when every note is on a lane (a drum kit
+    /// alone).
+    pub pitched: bool,
 }

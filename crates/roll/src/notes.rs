@@ -8,6 +8,8 @@ use crate::svg::{a, num, Writer};
 
 /// The narrowest a note is drawn, px (a zero-length note stays visible).
 const MIN_PX: f64 = 1.5;
+/// How wide a hit's outline is drawn, px (a drum's or a bar's note: its length means nothing).
+const HIT_PX: f64 = 3.0;
 
 /// Draws every note.
 pub fn notes(w: &mut Writer, roll: &Roll, l: &Layout) {
@@ -109,20 +111,21 @@ fn strike(w: &mut Writer, roll: &Roll, l: &Layout, n: &RollNote, colour: &str, s
     for (row, from, to) in l.pieces(s.sounded_ms, s.up_ms.max(s.sounded_ms)) {
         let x = l.x(row, from);
         let width = ((to - from) * l.px_per_ms).max(MIN_PX);
+        let (y, h) = l.band(row, n, true);
         w.empty(
             "rect",
             &[
                 a("class", "strike"),
                 a("x", num(x)),
-                a("y", num(l.y(row, key) + l.semitone * 0.2)),
+                a("y", num(y + h * 0.2)),
                 a("width", num(width)),
-                a("height", num(l.semitone * 0.6)),
+                a("height", num(h * 0.6)),
                 a("fill", colour),
                 a("fill-opacity", format!("{opacity:.2}")),
             ],
         );
     }
-    if key != n.note {
+    if key != n.note && n.lane.is_none() {
         // A folded note: a thin line from the written note to its key.
         if let Some((row, from, _)) = l.pieces(n.t_ms, n.t_ms).into_iter().next() {
             let x = l.x(row, from);
@@ -150,13 +153,19 @@ fn outline(w: &mut Writer, l: &Layout, n: &RollNote, colour: &str, ghost: bool) 
         Outcome::Skipped => Some("1 2"),
         _ => None,
     };
-    for (row, from, to) in l.pieces(n.t_ms, n.end_ms.max(n.t_ms)) {
+    // A hit (a drum, a bar) is drawn at its start, whatever its Note-Off says.
+    let end_ms = if n.hit { n.t_ms } else { n.end_ms.max(n.t_ms) };
+    for (row, from, to) in l.pieces(n.t_ms, end_ms) {
+        let (y, h) = l.band(row, n, false);
         let mut attrs = vec![
-            a("class", "score"),
+            a("class", if n.hit { "score hit" } else { "score" }),
             a("x", num(l.x(row, from))),
-            a("y", num(l.y(row, n.note) + 0.5)),
-            a("width", num(((to - from) * l.px_per_ms).max(MIN_PX))),
-            a("height", num(l.semitone - 1.0)),
+            a("y", num(y + 0.5)),
+            a(
+                "width",
+                num(((to - from) * l.px_per_ms).max(if n.hit { HIT_PX } else { MIN_PX })),
+            ),
+            a("height", num(h - 1.0)),
             a("fill", if ghost { colour } else { "none" }),
         ];
         if ghost {
@@ -178,7 +187,8 @@ fn mark(w: &mut Writer, l: &Layout, n: &RollNote, colour: &str) {
         return;
     };
     let x = l.x(row, from);
-    let ym = l.y(row, n.note) + l.semitone / 2.0;
+    let (y, h) = l.band(row, n, false);
+    let ym = y + h / 2.0;
     let r = (l.semitone * 0.6).max(2.5);
     match n.outcome {
         Outcome::Unison => w.empty(

@@ -133,22 +133,47 @@ pub fn roll_svg(
 }
 
 /// Where the roll draws each of `robot`'s outputs: keys and bars on their pitch's row, a kit's
-/// drums on the row of the note written; the rows shaded as the robot's span every note it
-/// plays.
+/// drums on lanes named as the kit names them (kick, snare…); the pitch rows shaded as the
+/// robot's span every note its keys and bars play.
 fn rows(robot: &Robot) -> orch_roll::build::Rows {
-    let mut note_of = Vec::new();
+    use orch_roll::build::OutputRow;
+    let mut rows = orch_roll::build::Rows::default();
     let (mut low, mut high) = (u8::MAX, 0);
     for g in &robot.groups {
-        for notes in &g.notes {
-            let kit = g.kind == orch_robot::GroupKind::Kit;
-            note_of.push(if kit { None } else { notes.first().copied() });
-            for &n in notes {
-                (low, high) = (low.min(n), high.max(n));
+        let kit = g.kind == orch_robot::GroupKind::Kit;
+        if kit {
+            rows.drum_channels |= robot
+                .config
+                .strikes
+                .group_of(g.first)
+                .map_or(0, |s| s.channels.0);
+        }
+        for (name, notes) in g.outputs.iter().zip(&g.notes) {
+            let row = match (g.kind, notes.first()) {
+                (_, None) => OutputRow::None,
+                (orch_robot::GroupKind::Kit, _) => {
+                    rows.lanes.push(name.clone());
+                    OutputRow::Drum(rows.lanes.len() as u16 - 1)
+                }
+                (orch_robot::GroupKind::Pitched, Some(&n)) => OutputRow::Bar(n),
+                (orch_robot::GroupKind::Keyboard, Some(&n)) => OutputRow::Key(n),
+            };
+            rows.outputs.push(row);
+            if !kit {
+                for &n in notes {
+                    (low, high) = (low.min(n), high.max(n));
+                }
             }
         }
     }
-    orch_roll::build::Rows {
-        keys: if low <= high { (low, high) } else { (36, 96) },
-        note_of,
+    rows.keys = (low <= high).then_some((low, high));
+    // As drums are written: cymbals on top, the kick at the bottom.
+    let n = rows.lanes.len() as u16;
+    rows.lanes.reverse();
+    for row in &mut rows.outputs {
+        if let OutputRow::Drum(lane) = row {
+            *lane = n - 1 - *lane;
+        }
     }
+    rows
 }
