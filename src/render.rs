@@ -92,7 +92,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
 /// output the General MIDI drum kit (at its first note, where the account does not say which
 /// of its notes a strike was), a pitched group's bar its program at the bar's note (the
 /// glockenspiel where the group names no program); an output in no group, the piano at the
-/// note of its place above the keyboard's lowest.
+/// note of its place above the keyboard's lowest; a lift sounds nothing, and a damper ends its
+/// output's ring.
 fn outputs(robot: &Robot) -> Vec<Output> {
     let keys = robot
         .groups
@@ -107,12 +108,12 @@ fn outputs(robot: &Robot) -> Vec<Output> {
                 return Output::key(robot.config.range.low().get().saturating_add(key) & 0x7F);
             };
             let i = usize::from(key - g.first);
-            let note = g
-                .notes
-                .get(i)
-                .and_then(|n| n.first())
-                .copied()
-                .unwrap_or(60);
+            let Some(&note) = g.notes.get(i).and_then(|n| n.first()) else {
+                // No note strikes it: a damper (of the output whose damper it is) or a lift.
+                let strikes = &robot.config.strikes;
+                let bar = (0..keys as u8).find(|&b| strikes.damper(b) == Some(key));
+                return bar.map_or_else(Output::silent, Output::damper);
+            };
             match g.kind {
                 GroupKind::Keyboard => Output::key(note),
                 GroupKind::Kit => Output::drum(note),

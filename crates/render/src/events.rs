@@ -180,15 +180,38 @@ pub struct Output {
     /// Whether it rings on after its pulse (a strike output), rather than sounding until the
     /// key is up again (a keyboard key).
     pub rings: bool,
+    /// Whether it makes no sound of its own (a lead, such as an open hi-hat's lift; a damper).
+    pub silent: bool,
+    /// The output it damps (a damper: its strike ends that output's ring).
+    pub damps: Option<u8>,
 }
 
 impl Output {
+    /// An output that sounds nothing: an open hi-hat's lift (its opening is in the note the
+    /// stick then sounds, 46).
+    pub fn silent() -> Self {
+        Self {
+            silent: true,
+            ..Self::key(0)
+        }
+    }
+
+    /// The damper of output `bar`: its strike ends that output's ring.
+    pub fn damper(bar: u8) -> Self {
+        Self {
+            damps: Some(bar),
+            ..Self::silent()
+        }
+    }
+
     /// A keyboard key playing `note` on the piano.
     pub fn key(note: u8) -> Self {
         Self {
             instrument: Instrument::PIANO,
             note,
             rings: false,
+            silent: false,
+            damps: None,
         }
     }
 
@@ -198,6 +221,8 @@ impl Output {
             instrument: Instrument::Drums,
             note,
             rings: true,
+            silent: false,
+            damps: None,
         }
     }
 
@@ -207,6 +232,8 @@ impl Output {
             instrument,
             note,
             rings: true,
+            silent: false,
+            damps: None,
         }
     }
 }
@@ -302,6 +329,13 @@ pub fn from_robot(
                 Some(strength)
             }
         };
+        if output.silent {
+            // A lift sounds nothing of its own; a damper's strike ends its bar's ring.
+            if let (Some(bar), Some(_)) = (output.damps, strike) {
+                rings.damp(usize::from(bar), at_ns, &mut events);
+            }
+            continue;
+        }
         let note = match output.instrument {
             Instrument::Drums => written
                 .get(&(s.key, s.time.as_nanos() / 1000))
@@ -389,6 +423,17 @@ impl Rings {
         }
         self.last[id] = Some(event);
         events.push(event);
+    }
+
+    /// Output `id` is damped at `at_ns`: its strike still ringing then is released there.
+    fn damp(&mut self, id: usize, at_ns: i64, events: &mut Vec<KeyEvent>) {
+        let Some(slot) = self.last.get_mut(id) else {
+            return;
+        };
+        if let Some(last) = slot.take_if(|l| l.at_ns < at_ns) {
+            let end = at_ns.min(last.at_ns.saturating_add(RING_NS));
+            events.push(release(&last, end));
+        }
     }
 
     /// The releases of the strikes still ringing, [`RING_NS`] after each.
@@ -546,6 +591,30 @@ mod tests {
             action: Action::Release,
             ..strike(at_ms, note)
         }
+    }
+
+    #[test]
+    fn a_damper_ends_its_outputs_ring_and_nothing_before_its_strike() {
+        let mut events = Vec::new();
+        let mut rings = Rings::new(2);
+        rings.strike(0, strike(0, 79), &mut events);
+        // Damped at 300 ms: released there; damped again: nothing rings any more.
+        rings.damp(0, 300 * 1_000_000, &mut events);
+        rings.damp(0, 400 * 1_000_000, &mut events);
+        // A damper before the bar's next strike leaves that strike alone.
+        rings.strike(0, strike(1000, 79), &mut events);
+        rings.damp(0, 1000 * 1_000_000, &mut events);
+        rings.damp(1, 1000 * 1_000_000, &mut events);
+        rings.finish(&mut events);
+        assert_eq!(
+            events,
+            vec![
+                strike(0, 79),
+                released(300, 79),
+                strike(1000, 79),
+                released(9000, 79)
+            ]
+        );
     }
 
     #[test]
