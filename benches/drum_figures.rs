@@ -5,11 +5,12 @@
 //! 1. **Onset error** of the drum notes' own strikes (sounded − score, ms): median, p99, max.
 //! 2. **What became of the drum notes**: struck, joined a strike already on (or waiting),
 //!    struck in unison with another note on the same beater, and dropped by reason.
-//! 3. **The shortest interval a beater repeats at**, from the virtual robot's pins: the
+//! 3. **The shortest interval each output repeats at**, from the virtual robot's pins: the
 //!    closest two strikes of one output, against its rebound (the physical limit robot.toml
-//!    gives: a beater cannot strike sooner).
-//! 4. **Energy**: the drum part's solenoid-on time (the pulses as the pins show them) against
-//!    holding each struck note's output for its written length, as a keyboard would.
+//!    gives: a beater cannot strike sooner); the hi-hat's lift too.
+//! 4. **Energy**: the drum part's solenoid-on time (the pulses as the pins show them: the
+//!    beaters' and the lift's, which add up to it) against holding each struck note's output
+//!    for its written length, as a keyboard would.
 //!
 //! `cargo bench --bench drum_figures`. Not a test: it prints.
 
@@ -29,7 +30,8 @@ fn main() {
     let manifest = std::fs::read_to_string(dir.join("MANIFEST.tsv")).expect("the corpus");
     let (mut onsets, mut outcomes) = (Vec::new(), HashMap::<String, u64>::new());
     let (mut closest, mut files) = (HashMap::<u8, u64>::new(), 0);
-    let (mut pulses_us, mut held_us) = (0u64, 0u64);
+    let (mut pulses_us, mut held_us) = (HashMap::<bool, u64>::new(), 0u64);
+    let mut lifts = 0u64;
     for line in manifest.lines().skip(1) {
         let cols: Vec<&str> = line.split('\t').collect();
         if !cols
@@ -63,7 +65,9 @@ fn main() {
         let mut last: HashMap<u8, u64> = HashMap::new();
         for p in presses {
             let (high, low) = (p.pin_high.as_nanos() / 1000, p.pin_low.as_nanos() / 1000);
-            pulses_us += low - high;
+            let extra = robot.config.strikes.is_extra(p.key);
+            *pulses_us.entry(extra).or_default() += low - high;
+            lifts += u64::from(extra);
             if let Some(before) = last.insert(p.key, high) {
                 let c = closest.entry(p.key).or_insert(u64::MAX);
                 *c = (*c).min(high - before);
@@ -89,23 +93,32 @@ fn main() {
     for (word, n) in list {
         println!("  {word}: {n}");
     }
-    // The beater that came nearest its limit: the least margin over its rebound.
+    // Each output's closest two strikes, against its rebound.
     let kit = &robot.groups[0];
-    if let Some((key, gap)) = closest.iter().min_by_key(|(k, gap)| {
-        **gap as i64 - i64::from(robot.config.strikes.pulse(**k).rebound.as_micros())
-    }) {
+    println!("closest two strikes of each output (its rebound, the limit):");
+    let mut keys: Vec<_> = closest.iter().collect();
+    keys.sort();
+    for (key, gap) in keys {
         println!(
-            "closest two strikes of one beater: {:.1} ms ({}, whose rebound, the limit, is {:.1} ms)",
-            *gap as f64 / 1000.0,
+            "  {}: {:.1} ms ({:.1} ms)",
             kit.output_name(*key).unwrap_or("?"),
+            *gap as f64 / 1000.0,
             robot.config.strikes.pulse(*key).rebound.as_micros() as f64 / 1000.0
         );
     }
+    let (beaters, lift) = (
+        pulses_us.get(&false).copied().unwrap_or(0),
+        pulses_us.get(&true).copied().unwrap_or(0),
+    );
+    let s = |us: u64| us as f64 / 1e6;
     println!(
-        "solenoid-on time: pulses {:.1} s against {:.1} s holding each note for its length ({:.1} %)",
-        pulses_us as f64 / 1e6,
-        held_us as f64 / 1e6,
-        100.0 * pulses_us as f64 / held_us.max(1) as f64
+        "solenoid-on time: {:.1} s = beaters {:.1} s + hi-hat lift {:.1} s ({lifts} lifts), against {:.1} s holding each note for its length ({:.1} %; the beaters alone {:.1} %)",
+        s(beaters + lift),
+        s(beaters),
+        s(lift),
+        s(held_us),
+        100.0 * (beaters + lift) as f64 / held_us.max(1) as f64,
+        100.0 * beaters as f64 / held_us.max(1) as f64
     );
 }
 
