@@ -38,6 +38,10 @@ rustup target list --installed | grep -qx thumbv6m-none-eabi || rustup target ad
 # package's layout is what scripts/pi.sh checks).
 rustup target list --installed | grep -qx aarch64-unknown-linux-gnu || rustup target add aarch64-unknown-linux-gnu
 [ "$(cargo deb --version 2>/dev/null)" = "cargo-deb 3.8.0" ] || cargo install --locked cargo-deb --version 3.8.0
+# mdBook, which builds the book (book/): pinned, with its search and no server or watcher (the
+# `serve` and `watch` features), which keeps its build to a few minutes.
+[ "$(mdbook --version 2>/dev/null)" = "mdbook v0.4.52" ] \
+    || cargo install --locked mdbook --version 0.4.52 --no-default-features --features search
 
 step "format"
 cargo fmt --all -- --check
@@ -51,6 +55,9 @@ cargo clippy -p orch-core --no-default-features --all-targets -- -D warnings
 
 step "docs"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features
+
+step "book: mdbook build book (tests/book.rs, in the tests below, checks its links and runs its examples)"
+mdbook build book
 
 step "fuzz target builds (stable; running it needs nightly, see fuzz/README.md)"
 if [ -f fuzz/Cargo.toml ]; then cargo check --manifest-path fuzz/Cargo.toml --bins; fi

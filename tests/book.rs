@@ -19,7 +19,8 @@
 //! file an earlier one wrote. It holds `examples/` (a link to the repository's). `orch` is the
 //! binary under test, first on `PATH`.
 //!
-//! `ORCH_BOOK_UPDATE=1 cargo test -p orch --test book` rewrites the generated reference files.
+//! `ORCH_BOOK_UPDATE=1 cargo test -p orch --test book` rewrites the generated files: the
+//! reference's robot.toml files and the piano roll.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
@@ -282,7 +283,8 @@ fn orch() -> Command {
     Command::new(env!("CARGO_BIN_EXE_orch"))
 }
 
-/// The reference's robot.toml files are what `orch config` prints (one source: the command).
+/// The reference's robot.toml files are what `orch config` prints (one source: the command), and
+/// the piano roll shown is what `orch analyze --svg` draws.
 #[test]
 fn the_generated_reference_is_what_orch_prints() {
     let cases: [(&str, &[&str]); 4] = [
@@ -305,6 +307,26 @@ fn the_generated_reference_is_what_orch_prints() {
         } else if fs::read_to_string(&path).ok().as_deref() != Some(printed.as_str()) {
             stale.push(format!("{} is not `orch {}`", path.display(), args.join(" ")));
         }
+    }
+    // The picture of the README and of the roll's chapter: Ode to Joy's piano roll.
+    let svg = std::env::temp_dir().join(format!("orch-book-roll-{}.svg", std::process::id()));
+    let out = orch()
+        .args(["analyze", "examples/ode-to-joy.mid", "--svg"])
+        .arg(&svg)
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "orch analyze --svg failed");
+    let drawn = fs::read_to_string(&svg).unwrap();
+    let _ = fs::remove_file(&svg);
+    let picture = book_src().join("ode-to-joy-roll.svg");
+    if update {
+        fs::write(&picture, &drawn).unwrap();
+    } else if fs::read_to_string(&picture).ok().as_deref() != Some(drawn.as_str()) {
+        stale.push(format!(
+            "{} is not `orch analyze examples/ode-to-joy.mid --svg FILE`",
+            picture.display()
+        ));
     }
     assert!(
         stale.is_empty(),
