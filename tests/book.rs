@@ -148,14 +148,20 @@ fn anchors(path: &Path) -> BTreeSet<String> {
     let mut seen: BTreeMap<String, usize> = BTreeMap::new();
     let mut ids = BTreeSet::new();
     for line in prose {
-        let Some(heading) = line.strip_prefix('#') else { continue };
+        let Some(heading) = line.strip_prefix('#') else {
+            continue;
+        };
         let heading = heading.trim_start_matches('#');
         if !heading.starts_with(' ') {
             continue;
         }
         let id = heading_id(heading);
         let n = seen.entry(id.clone()).or_insert(0);
-        ids.insert(if *n == 0 { id.clone() } else { format!("{id}-{n}") });
+        ids.insert(if *n == 0 {
+            id.clone()
+        } else {
+            format!("{id}-{n}")
+        });
         *n += 1;
     }
     ids
@@ -259,7 +265,11 @@ fn every_link_and_anchor_resolves() {
     for file in &files {
         check_links(file, &mut problems);
     }
-    assert!(problems.is_empty(), "broken links:\n{}", problems.join("\n"));
+    assert!(
+        problems.is_empty(),
+        "broken links:\n{}",
+        problems.join("\n")
+    );
 }
 
 #[test]
@@ -291,7 +301,10 @@ fn the_generated_reference_is_what_orch_prints() {
         ("piano.toml", &["config"]),
         ("piano-pca9685.toml", &["config", "--boards", "pca9685"]),
         ("drums.toml", &["config", "--instrument", "drums"]),
-        ("glockenspiel.toml", &["config", "--instrument", "glockenspiel"]),
+        (
+            "glockenspiel.toml",
+            &["config", "--instrument", "glockenspiel"],
+        ),
     ];
     let dir = book_src().join("reference/generated");
     let update = std::env::var_os("ORCH_BOOK_UPDATE").is_some();
@@ -305,7 +318,11 @@ fn the_generated_reference_is_what_orch_prints() {
             fs::create_dir_all(&dir).unwrap();
             fs::write(&path, &printed).unwrap();
         } else if fs::read_to_string(&path).ok().as_deref() != Some(printed.as_str()) {
-            stale.push(format!("{} is not `orch {}`", path.display(), args.join(" ")));
+            stale.push(format!(
+                "{} is not `orch {}`",
+                path.display(),
+                args.join(" ")
+            ));
         }
     }
     // The picture of the README and of the roll's chapter: Ode to Joy's piano roll.
@@ -372,7 +389,11 @@ fn output_matches(want: &[String], got: &[&str]) -> bool {
 
 fn bash(script: &str, dir: &Path) -> std::process::Output {
     let bin = Path::new(env!("CARGO_BIN_EXE_orch")).parent().unwrap();
-    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    let path = format!(
+        "{}:{}",
+        bin.display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
     Command::new("bash")
         .arg("-c")
         .arg(script)
@@ -499,6 +520,9 @@ fn the_matcher_matches() {
     assert!(output_matches(&want, &["a  c", "end"]));
     assert!(!output_matches(&want, &["a b d", "end"]));
     assert!(!output_matches(&want, &["a b c", "end", "more"]));
-    assert_eq!(heading_id("Outputs: `orch play --out`"), "outputs-orch-play---out");
+    assert_eq!(
+        heading_id("Outputs: `orch play --out`"),
+        "outputs-orch-play---out"
+    );
     assert_eq!(heading_id("The web page"), "the-web-page");
 }
