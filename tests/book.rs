@@ -90,10 +90,10 @@ fn parse(text: &str) -> (Vec<String>, Vec<Block>) {
                     prose.push(String::new());
                 } else {
                     // The last paragraph stays until the next one starts.
-                    if line.trim().is_empty() {
-                    } else if prose.last().is_none_or(|l: &String| l.trim().is_empty()) {
-                        paragraph = vec![line.to_string()];
-                    } else {
+                    if !line.trim().is_empty() {
+                        if prose.last().is_none_or(|l: &String| l.trim().is_empty()) {
+                            paragraph.clear();
+                        }
                         paragraph.push(line.to_string());
                     }
                     prose.push(line.to_string());
@@ -329,7 +329,13 @@ fn the_generated_reference_is_what_orch_prints() {
     // its tempo, where a few notes come late and one is dropped.
     let svg = std::env::temp_dir().join(format!("orch-book-roll-{}.svg", std::process::id()));
     let out = orch()
-        .args(["analyze", "examples/ode-to-joy.mid", "--tempo", "4", "--svg"])
+        .args([
+            "analyze",
+            "examples/ode-to-joy.mid",
+            "--tempo",
+            "4",
+            "--svg",
+        ])
         .arg(&svg)
         .current_dir(root())
         .output()
