@@ -40,7 +40,8 @@ rustup target list --installed | grep -qx thumbv6m-none-eabi || rustup target ad
 rustup target list --installed | grep -qx aarch64-unknown-linux-gnu || rustup target add aarch64-unknown-linux-gnu
 [ "$(cargo deb --version 2>/dev/null)" = "cargo-deb 3.8.0" ] || cargo install --locked cargo-deb --version 3.8.0
 # mdBook, which builds the book (book/): pinned, with its search and no server or watcher (the
-# `serve` and `watch` features), which keeps its build to a few minutes.
+# `serve` and `watch` features). From an empty CARGO_HOME it costs 213 s of CPU (5 min of wall
+# time on this project's shared 2-core machine; without search too it is 191 s, so search stays).
 [ "$(mdbook --version 2>/dev/null)" = "mdbook v0.4.52" ] \
     || cargo install --locked mdbook --version 0.4.52 --no-default-features --features search
 
