@@ -19,9 +19,10 @@ step "install: Debian packages, the firmware's nightly (firmware/install.sh), ru
 # (tests/serve_browser.rs) drive headless Chromium through chromedriver.
 # gcc-aarch64-linux-gnu, libc6-dev-arm64-cross, qemu-user and systemd (systemd-analyze,
 # systemd-sysusers): the Raspberry Pi step (scripts/pi.sh) links orch for arm64, runs it, and
-# checks its systemd unit and package.
+# checks its systemd unit and package. curl: the book's web page chapter scripts `orch serve` with
+# it (tests/book.rs runs every example of the book).
 bash firmware/install.sh tmux libasound2-dev libclang-dev timgm6mb-soundfont chromium chromium-driver \
-    gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user systemd
+    gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user systemd curl
 # pymidi 0.5.0 (PyPI): the independent RTP-MIDI peer of tests/rtpmidi.rs (it imports six
 # without declaring it).
 python3 -c "import pymidi.server, six" 2>/dev/null || python3 -m pip install -q pymidi==0.5.0 six
@@ -38,6 +39,11 @@ rustup target list --installed | grep -qx thumbv6m-none-eabi || rustup target ad
 # package's layout is what scripts/pi.sh checks).
 rustup target list --installed | grep -qx aarch64-unknown-linux-gnu || rustup target add aarch64-unknown-linux-gnu
 [ "$(cargo deb --version 2>/dev/null)" = "cargo-deb 3.8.0" ] || cargo install --locked cargo-deb --version 3.8.0
+# mdBook, which builds the book (book/): pinned, with its search and no server or watcher (the
+# `serve` and `watch` features). From an empty CARGO_HOME it costs 213 s of CPU (5 min of wall
+# time on this project's shared 2-core machine; without search too it is 191 s, so search stays).
+[ "$(mdbook --version 2>/dev/null)" = "mdbook v0.4.52" ] \
+    || cargo install --locked mdbook --version 0.4.52 --no-default-features --features search
 
 step "format"
 cargo fmt --all -- --check
@@ -51,6 +57,9 @@ cargo clippy -p orch-core --no-default-features --all-targets -- -D warnings
 
 step "docs"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features
+
+step "book: mdbook build book (tests/book.rs, in the tests below, checks its links and runs its examples)"
+mdbook build book
 
 step "fuzz target builds (stable; running it needs nightly, see fuzz/README.md)"
 if [ -f fuzz/Cargo.toml ]; then cargo check --manifest-path fuzz/Cargo.toml --bins; fi

@@ -41,7 +41,7 @@ pub enum Command {
     /// itself) as sound, through a SoundFont, to a WAV file.
     Render(RenderArgs),
     /// Serve one web page to pick, analyse and play songs on the robot, live, from a phone
-    /// (see the README's "The web page: `orch serve`").
+    /// (see the book's "The web page").
     Serve(ServeArgs),
 }
 
@@ -178,7 +178,7 @@ pub struct PlayArgs {
     #[arg(long, value_name = "FILE")]
     pub writes: Option<PathBuf>,
     /// Write the note-by-note account to FILE: one JSON object a line for every note of the
-    /// file, in score order (see the README's `--notes`); with several outputs, each robot's
+    /// file, in score order (see the book's "JSON formats"); with several outputs, each robot's
     /// in turn, with its "out".
     #[arg(long, value_name = "FILE")]
     pub notes: Option<PathBuf>,
@@ -198,11 +198,12 @@ pub struct AnalyzeArgs {
     #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
     pub tempo: f64,
     /// Write the note-by-note account to FILE: one JSON object a line for every note of the
-    /// file, in score order (see the README's `--notes`).
+    /// file, in score order (see the book's "JSON formats").
     #[arg(long, value_name = "FILE")]
     pub notes: Option<PathBuf>,
     /// Write a piano roll of the performance to FILE as SVG: the score's notes as outlines,
-    /// the robot's strikes as fills, coloured by outcome (see the README's `--svg`).
+    /// the robot's strikes as fills, coloured by outcome (see the book's "Analyze, the roll,
+    /// render").
     #[arg(long, value_name = "FILE")]
     pub svg: Option<PathBuf>,
 }
