@@ -31,7 +31,7 @@ fn main() {
     let (mut onsets, mut outcomes) = (Vec::new(), HashMap::<String, u64>::new());
     let (mut closest, mut files) = (HashMap::<u8, u64>::new(), 0);
     let (mut pulses_us, mut held_us) = (HashMap::<bool, u64>::new(), 0u64);
-    let mut lifts = 0u64;
+    let (mut lifts, mut open_hats) = (0u64, 0u64);
     for line in manifest.lines().skip(1) {
         let cols: Vec<&str> = line.split('\t').collect();
         if !cols
@@ -47,6 +47,9 @@ fn main() {
         files += 1;
         let played = orch_stage::setup::play_fast(&song, &setup).expect("plays");
         for r in played.records.iter().filter(|r| r.channel == 9) {
+            if r.note == 46 && matches!(r.outcome, Outcome::OnTime { .. } | Outcome::Late { .. }) {
+                open_hats += 1;
+            }
             let word = match r.outcome {
                 Outcome::OnTime { error_us } => {
                     onsets.push(f64::from(error_us) / 1000.0);
@@ -106,6 +109,7 @@ fn main() {
             robot.config.strikes.pulse(*key).rebound.as_micros() as f64 / 1000.0
         );
     }
+    println!("open hi-hats struck: {open_hats}, their lift fired first for {lifts} (skipped while still up)");
     let (beaters, lift) = (
         pulses_us.get(&false).copied().unwrap_or(0),
         pulses_us.get(&true).copied().unwrap_or(0),
