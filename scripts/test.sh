@@ -42,8 +42,15 @@ rustup target list --installed | grep -qx aarch64-unknown-linux-gnu || rustup ta
 # mdBook, which builds the book (book/): pinned, with its search and no server or watcher (the
 # `serve` and `watch` features). From an empty CARGO_HOME it costs 213 s of CPU (5 min of wall
 # time on this project's shared 2-core machine; without search too it is 191 s, so search stays).
-[ "$(mdbook --version 2>/dev/null)" = "mdbook v0.4.52" ] \
-    || cargo install --locked mdbook --version 0.4.52 --no-default-features --features search
+# It builds in the background, beside the format, lint and docs steps (its log is shown if it
+# fails), and is waited for before the book step.
+mdbook_pid=""
+if [ "$(mdbook --version 2>/dev/null)" != "mdbook v0.4.52" ]; then
+    mdbook_log="$(mktemp)"
+    cargo install --locked mdbook --version 0.4.52 --no-default-features --features search \
+        >"$mdbook_log" 2>&1 &
+    mdbook_pid=$!
+fi
 
 step "format"
 cargo fmt --all -- --check
@@ -59,6 +66,9 @@ step "docs"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features
 
 step "book: mdbook build book (tests/book.rs, in the tests below, checks its links and runs its examples)"
+if [ -n "$mdbook_pid" ]; then
+    wait "$mdbook_pid" || { cat "$mdbook_log"; echo "installing mdbook failed"; exit 1; }
+fi
 mdbook build book
 
 step "fuzz target builds (stable; running it needs nightly, see fuzz/README.md)"
