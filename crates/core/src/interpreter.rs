@@ -708,16 +708,19 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             if self.fingers.phase(key) == DOWN {
                 let duty = self.duty_cut_after(key);
                 let short = self.fingers.has(key, RELEASE_AFTER);
-                if hold.is_some_and(|h| age >= h) {
-                    self.count(|s| s.cut_by_hold_limit += 1);
+                let cut_by_hold = hold.is_some_and(|h| age >= h);
+                let cut_by_duty = !cut_by_hold && duty.is_some_and(|d| age >= d);
+                if cut_by_hold || cut_by_duty {
+                    if cut_by_hold {
+                        self.count(|s| s.cut_by_hold_limit += 1);
+                    } else {
+                        self.count(|s| s.cut_by_duty_limit += 1);
+                    }
                     self.forget_key(key);
+                }
+                if cut_by_hold || cut_by_duty || (short && age >= min_press) {
                     self.release_now(key, now);
-                } else if duty.is_some_and(|d| age >= d) {
-                    self.count(|s| s.cut_by_duty_limit += 1);
-                    self.forget_key(key);
-                    self.release_now(key, now);
-                } else if short && age >= min_press {
-                    self.release_now(key, now);
+                    // A bar whose Note-Off came while its beater struck: its damper now.
                     #[cfg(feature = "strike")]
                     if let Some(limit) = self.try_damp(key, now) {
                         soonest(limit);
@@ -1179,9 +1182,10 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         self.set_damp_due(key, false);
         #[cfg(feature = "strike")]
         if let Some((lead, time)) = self.lead_of(key, channel, note) {
-            // An open hi-hat: the lift fires now, the stick when the lift's time has passed
-            // (or its rebound, if that is later).
-            self.fire(lead, velocity, now);
+            // An open hi-hat: the lift fires now (at full power: a soft note must still open
+            // the cymbals), the stick when the lift's time has passed (or its rebound, if
+            // that is later).
+            self.fire(lead, Velocity::MAX, now);
             self.fingers.set_velocity(key, velocity.get());
             self.strike_after(key, folded, time.as_micros(), now);
             sink.note(NoteEvent::Leading { channel, note, at });
