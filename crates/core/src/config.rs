@@ -10,6 +10,8 @@ use crate::strike::{StrikeError, Strikes};
 use crate::time::Duration;
 use crate::values::ChannelMask;
 use crate::values::{Channel, Note};
+#[cfg(feature = "wind")]
+use crate::wind::{Wind, WindError};
 
 /// The longest any guard limit may be: 30 minutes. Per-key times are kept in 32 bits of
 /// microseconds (71 minutes), and the guard needs half that range to tell old from new.
@@ -183,6 +185,11 @@ pub struct Config<const B: usize> {
     /// feature.
     #[cfg(feature = "strike")]
     pub strikes: Strikes,
+    /// The fingered group after the keyboard and the strike groups (a recorder): its fingers,
+    /// valve and fingering table. Default: none ([`Wind::NONE`]). See [`wind`](crate::wind).
+    /// Needs the `wind` feature.
+    #[cfg(feature = "wind")]
+    pub wind: Wind,
 }
 
 impl Config<4> {
@@ -199,6 +206,8 @@ impl Config<4> {
         dynamics: Dynamics::ON_OFF,
         #[cfg(feature = "strike")]
         strikes: Strikes::NONE,
+        #[cfg(feature = "wind")]
+        wind: Wind::NONE,
     };
 }
 
@@ -278,6 +287,9 @@ pub enum ConfigError {
     /// The strike groups cannot be played: see [`StrikeError`](crate::StrikeError).
     #[cfg(feature = "strike")]
     Strike(StrikeError),
+    /// The fingered group cannot be played.
+    #[cfg(feature = "wind")]
+    Wind(WindError),
 }
 
 impl core::fmt::Display for ConfigError {
@@ -304,6 +316,8 @@ impl core::fmt::Display for ConfigError {
             ConfigError::Dynamics(e) => write!(f, "dynamics: {e}"),
             #[cfg(feature = "strike")]
             ConfigError::Strike(e) => write!(f, "strike groups: {e}"),
+            #[cfg(feature = "wind")]
+            ConfigError::Wind(e) => write!(f, "fingered group: {e}"),
             ConfigError::BadDuty => f.write_str(
                 "guard duty limit: max_on must be above 0, at most the window and at most 60 s",
             ),
@@ -314,14 +328,30 @@ impl core::fmt::Display for ConfigError {
 impl core::error::Error for ConfigError {}
 
 impl<const B: usize> Config<B> {
-    /// How many keys (outputs) the robot has: the keyboard's and the strike groups'.
+    /// How many keys (outputs) the robot has: the keyboard's, the strike groups' and the
+    /// fingered group's.
     #[inline(always)]
     pub fn keys(&self) -> usize {
+        self.keys_before_wind() + self.wind_outputs()
+    }
+
+    /// The keyboard's keys and the strike groups' outputs: where a fingered group begins.
+    #[inline(always)]
+    pub fn keys_before_wind(&self) -> usize {
         #[cfg(feature = "strike")]
         if self.strikes.count > 0 || !self.strikes.keyboard {
             return self.keyboard_keys() + self.strikes.outputs();
         }
         self.range.keys()
+    }
+
+    /// The fingered group's outputs (0 without one).
+    #[inline(always)]
+    fn wind_outputs(&self) -> usize {
+        #[cfg(feature = "wind")]
+        return self.wind.outputs();
+        #[cfg(not(feature = "wind"))]
+        0
     }
 
     /// How many keys the keyboard has: `range`'s, or 0 for a robot without one.
@@ -348,11 +378,40 @@ impl<const B: usize> Config<B> {
                 Some(Err(StrikeMiss::Range)) => Some(DropReason::Range),
                 None => None,
             };
-            self.keyboard_key(channel, note)
+            self.wind_or_keyboard(channel, note)
                 .map_err(|reason| miss.unwrap_or(reason))
         }
         #[cfg(not(feature = "strike"))]
+        self.wind_or_keyboard(channel, note)
+    }
+
+    /// A note the strike groups leave: the fingered group's (its valve, as every one of its
+    /// notes lands) if it listens to the channel, else the keyboard's.
+    #[inline(always)]
+    fn wind_or_keyboard(&self, channel: Channel, note: Note) -> Result<KeyOf, DropReason> {
+        #[cfg(feature = "wind")]
+        if self.wind.is_on() && self.wind.channels.contains(channel) {
+            return match self.wind.find(note) {
+                Some(of) => Ok(KeyOf {
+                    key: self.wind.valve(),
+                    octaves: of.octaves,
+                }),
+                None => Err(DropReason::Range),
+            };
+        }
         self.keyboard_key(channel, note)
+    }
+
+    /// Whether `key` is the fingered group's (a finger or its valve).
+    #[inline(always)]
+    pub fn is_wind(&self, key: u8) -> bool {
+        #[cfg(feature = "wind")]
+        return self.wind.owns(key);
+        #[cfg(not(feature = "wind"))]
+        {
+            let _ = key;
+            false
+        }
     }
 
     /// The keyboard's key for a note on `channel`, or why it has none.
@@ -395,8 +454,21 @@ impl<const B: usize> Config<B> {
                 return Err(ConfigError::Strike(StrikeError::GuardOff));
             }
             self.strikes
-                .validate(self.range.keys(), self.layout.keys(), self.guard.max_pulse)
+                .validate(
+                    self.range.keys(),
+                    self.layout.keys() - self.wind_outputs().min(self.layout.keys()),
+                    self.guard.max_pulse,
+                )
                 .map_err(ConfigError::Strike)?;
+        }
+        #[cfg(feature = "wind")]
+        if self.wind.is_on() {
+            if !self.guard.enabled {
+                return Err(ConfigError::Wind(WindError::GuardOff));
+            }
+            self.wind
+                .validate(self.keys_before_wind())
+                .map_err(ConfigError::Wind)?;
         }
         if self.layout.keys() != keys {
             return Err(ConfigError::LayoutKeys {

@@ -16,6 +16,9 @@ use crate::stats::Stats;
 use crate::time::{Duration, Instant};
 use crate::values::{Channel, Note, Velocity};
 
+#[cfg(feature = "wind")]
+mod wind_play;
+
 /// The specification's Active Sensing timeout: 300 ms.
 pub const ACTIVE_SENSING_TIMEOUT: Duration = Duration::from_millis(300);
 
@@ -166,6 +169,9 @@ pub struct Interpreter<
     /// their beater's pulse is over and no sustain pedal of their group holds.
     #[cfg(feature = "strike")]
     damp_due: [u8; 16],
+    /// The fingered group's notes and phase ([`wind`](crate::wind)).
+    #[cfg(feature = "wind")]
+    wind_state: crate::wind::WindState,
     /// The duties last written to each board by [`flush_duties`](Self::flush_duties).
     #[cfg(feature = "dynamics")]
     duties: [[Duty; 16]; B],
@@ -242,6 +248,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             stats: NO_STATS,
             #[cfg(feature = "strike")]
             damp_due: [0; 16],
+            #[cfg(feature = "wind")]
+            wind_state: crate::wind::WindState::NEW,
             #[cfg(feature = "dynamics")]
             duties: [[Duty::OFF; 16]; B],
         }
@@ -261,6 +269,7 @@ const NO_STATS: Stats = Stats {
     dropped_power: 0,
     dropped_cancelled: 0,
     dropped_too_fast: 0,
+    dropped_monophonic: 0,
     dropped_stopped: 0,
     joined: 0,
     restrikes_delayed: 0,
@@ -383,12 +392,31 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 .touch(key)
                 .strike_duty(self.velocity(key))
         } else {
-            self.config
-                .dynamics
-                .duty_at(key, self.velocity(key), self.fingers.age(key, self.clock))
+            let duty = self.config.dynamics.duty_at(
+                key,
+                self.velocity(key),
+                self.fingers.age(key, self.clock),
+            );
+            self.wind_breath(key, duty)
         };
         #[cfg(not(feature = "dynamics"))]
         return Duty::FULL;
+    }
+
+    /// `duty` scaled by the breath of the fingered group's note if `key` is its valve (high
+    /// notes need more air): at least 1 where `duty` is above 0.
+    #[cfg(feature = "dynamics")]
+    fn wind_breath(&self, key: u8, duty: Duty) -> Duty {
+        #[cfg(feature = "wind")]
+        if self.config.wind.is_on() && key == self.config.wind.valve() {
+            if let Some((_, index, ..)) = self.wind_state.target {
+                let breath = self.config.wind.fingering(index).breath as u32;
+                let scaled = (duty.get() as u32 * breath).div_ceil(4095);
+                return Duty::new(scaled.min(4095) as u16).unwrap_or(duty);
+            }
+        }
+        let _ = key;
+        duty
     }
 
     /// Every board's 16 duties now ([`key_duty`](Self::key_duty) of each key on its output; outputs
@@ -717,6 +745,11 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                         self.count(|s| s.cut_by_duty_limit += 1);
                     }
                     self.forget_key(key);
+                    // A finger or the valve: the whole group stops, the valve with it.
+                    #[cfg(feature = "wind")]
+                    if self.config.is_wind(key) {
+                        self.wind_cut(now);
+                    }
                 }
                 if cut_by_hold || cut_by_duty || (short && age >= min_press) {
                     self.release_now(key, now);
@@ -755,6 +788,10 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             } else {
                 soonest(self.rest(key) - age);
             }
+        }
+        #[cfg(feature = "wind")]
+        if let Some(t) = self.wind_timers(now, sink) {
+            next = next.min(t);
         }
         self.due = if next == u32::MAX {
             Kept::NEVER
@@ -1104,6 +1141,11 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             }
         };
         let at = Landing { key, octaves };
+        #[cfg(feature = "wind")]
+        if self.config.is_wind(key) {
+            self.wind_note_on(channel, note, velocity, at, now, sink);
+            return;
+        }
         let folded = octaves != 0;
         if folded {
             self.count(|s| s.folded_octaves += octaves.unsigned_abs() as u32);
@@ -1217,6 +1259,13 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     }
 
     fn note_off(&mut self, channel: Channel, note: Note, now: u32) {
+        #[cfg(feature = "wind")]
+        if let Ok(KeyOf { key, .. }) = self.route(channel, note) {
+            if self.config.is_wind(key) {
+                self.wind_note_off(note, now);
+                return;
+            }
+        }
         #[cfg(feature = "strike")]
         if let Ok(KeyOf { key, .. }) = self.route(channel, note) {
             if self.is_strike(key) {
@@ -1264,6 +1313,10 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     /// pedal's notes as well; All Notes Off leaves a pedal that is down holding them, as
     /// each note's own Note-Off would.
     fn channel_off(&mut self, channel: Channel, sound_off: bool, now: u32) {
+        #[cfg(feature = "wind")]
+        if self.config.wind.is_on() && self.config.wind.channels.contains(channel) {
+            self.wind_all_notes_off(now);
+        }
         let pedal = self.config.sustain && self.pedals & channel.bit() != 0;
         if pedal && !sound_off {
             self.notes.sustain_channel(channel);
@@ -1282,7 +1335,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
             // go by itself.
             let busy = (phase == DOWN || phase == PENDING)
                 && !self.fingers.has(key, RELEASE_AFTER)
-                && !self.is_strike(key);
+                && !self.is_strike(key)
+                && !self.config.is_wind(key);
             if busy && !self.held(key) {
                 self.release_key(key, now);
             }
@@ -1296,6 +1350,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         {
             self.damp_due = [0; 16];
         }
+        #[cfg(feature = "wind")]
+        self.wind_reset(why, sink);
         // Only keys down or waiting have anything to release or cancel.
         let mut from = 0;
         while let Some(key) = self.fingers.next_timed(from) {

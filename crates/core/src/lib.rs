@@ -56,9 +56,10 @@
 //! | the statistics and the decoder's counters (feature `stats`, off on the ATmega16) | 88 (+8 padding) |
 //! | dynamics (feature `dynamics`, off on the ATmega16): the configuration's per-key [`Touch`] table and strike time (772), the duties last written to 4 boards (128) | 900 |
 //! | strike groups (feature `strike`, off on the ATmega16): every key's pulse (1536), the sparse groups' note maps (512) and leads (512), the lead times (512), the dampers (128) and the groups, in the configuration; the dampers due (16) and the skipped count | 3260 |
+//! | a fingered group (feature `wind`, off on the ATmega16): its table of 48 fingerings and figures, in the configuration (212); the notes held and the note playing (40) | 252 |
 //! | `Interpreter<4, 61, NotePool<32>>` without `duty-limit` and `stats` | 616 |
 //! | **`Interpreter<4, 61, NotePool<32>, Thesis>` without `duty-limit` and `stats`: the ATmega16 build** | **544** |
-//! | **[`Interpreter`] with [`NoteTable`], the duty limit, the statistics, dynamics and strike groups: the host's** | **5400** |
+//! | **[`Interpreter`] with [`NoteTable`], the duty limit, the statistics, dynamics, strike groups and a fingered group: the host's** | **5652** |
 //!
 //! AVR has no padding, so the ATmega16 figure is a few bytes lower (536). The [`Decoder`]
 //! alone takes 12 bytes (28 with `stats`).
@@ -90,6 +91,9 @@
 //!   and a guard that counts current and energy instead of keys. 900 bytes of RAM with a
 //!   configuration in RAM (its per-key table), 128 with a constant one. Without it every key
 //!   is on/off. The ATmega16 firmware builds without it.
+//! - `wind` (default): a fingered group ([`wind`]): a wind robot's fingers and valve, one
+//!   note at a time, the valve never open while a finger moves. 252 bytes of RAM with a
+//!   configuration in RAM, 40 with a constant one. The ATmega16 firmware builds without it.
 //! - `strike` (default): strike groups beside or instead of the keyboard (drums, mallets:
 //!   [`strike`]), pulses that end by themselves, leads (an open hi-hat's lift) and dampers. 3260
 //!   bytes of RAM with a configuration in RAM, 20 with a constant one. The ATmega16 firmware builds without it.
@@ -115,6 +119,8 @@ mod stats;
 pub mod strike;
 mod time;
 mod values;
+#[cfg(feature = "wind")]
+pub mod wind;
 
 pub use config::{
     Config, ConfigError, ConfigSource, DutyLimit, GuardConfig, Overlap, Thesis, MAX_LIMIT,
@@ -134,3 +140,5 @@ pub use stats::Stats;
 pub use strike::{Pulse, StrikeError, StrikeGroup, StrikeNotes, Strikes};
 pub use time::{Duration, Instant};
 pub use values::{Channel, ChannelMask, InvalidValue, Note, Velocity, U14, U7};
+#[cfg(feature = "wind")]
+pub use wind::{Fingering, Voice, Wind, WindError};

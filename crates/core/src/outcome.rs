@@ -26,8 +26,12 @@ pub enum DropReason {
     /// Past the power budget (`max_keys_down`), or the store of held notes was full.
     Power,
     /// A re-strike that could not sound within the guard's `late_limit` of its arrival: the
-    /// key had not rested long enough.
+    /// key had not rested long enough. On a fingered group: a note whose Note-Off came before
+    /// its fingers had settled, taken over by the next note.
     TooFast,
+    /// A note of a chord that a one-voice group (a wind instrument: see
+    /// [`wind`](crate::wind)) does not play: another note of the chord won.
+    Monophonic,
     /// Waiting for its re-strike, it was cancelled: a later note on the key took the strike
     /// over, or a System Reset, the watchdog or the missing Active Sensing released everything.
     Cancelled,
@@ -42,20 +46,21 @@ pub enum DropReason {
 
 impl DropReason {
     /// Every reason, in report order.
-    pub const ALL: [DropReason; 9] = [
+    pub const ALL: [DropReason; 10] = [
         DropReason::Channel,
         DropReason::Percussion,
         DropReason::Unmapped,
         DropReason::Range,
         DropReason::Power,
         DropReason::TooFast,
+        DropReason::Monophonic,
         DropReason::TooSoft,
         DropReason::Cancelled,
         DropReason::Stopped,
     ];
 
     /// The reason's name in reports: `channel`, `percussion`, `unmapped`, `range`, `power`,
-    /// `too_fast`, `too_soft`, `cancelled`, `stopped`.
+    /// `too_fast`, `monophonic`, `too_soft`, `cancelled`, `stopped`.
     pub const fn name(self) -> &'static str {
         match self {
             DropReason::Channel => "channel",
@@ -64,6 +69,7 @@ impl DropReason {
             DropReason::Range => "range",
             DropReason::Power => "power",
             DropReason::TooFast => "too_fast",
+            DropReason::Monophonic => "monophonic",
             DropReason::Cancelled => "cancelled",
             DropReason::Stopped => "stopped",
             DropReason::TooSoft => "too_soft",

@@ -50,8 +50,11 @@ pub struct Stats {
     /// ([`NotePool`](crate::NotePool)). Keys already down are never cut for a new note.
     pub dropped_power: u32,
     /// Re-strikes that would have waited longer than the guard's `late_limit` for their key's
-    /// rest: refused, the key left as it was.
+    /// rest: refused, the key left as it was. On a fingered group: notes released before their
+    /// fingers settled and taken over by the next.
     pub dropped_too_fast: u32,
+    /// Notes of a chord a one-voice (fingered) group did not play.
+    pub dropped_monophonic: u32,
     /// Strikes waiting for their re-strike gap that never struck: taken over by a later note
     /// on the key, or released with everything by a System Reset, the watchdog or missing
     /// Active Sensing. A waiting strike whose note merely ends (a Note-Off, All Notes Off) is
@@ -85,7 +88,7 @@ pub struct Stats {
 impl Stats {
     /// All notes dropped, for any reason: `dropped_channel + dropped_percussion +
     /// dropped_unmapped + dropped_range + dropped_power + dropped_too_fast +
-    /// dropped_cancelled + dropped_stopped`.
+    /// dropped_monophonic + dropped_cancelled + dropped_stopped`.
     pub const fn dropped(&self) -> u32 {
         self.dropped_channel
             + self.dropped_percussion
@@ -93,6 +96,7 @@ impl Stats {
             + self.dropped_range
             + self.dropped_power
             + self.dropped_too_fast
+            + self.dropped_monophonic
             + self.dropped_cancelled
             + self.dropped_stopped
     }

@@ -131,6 +131,9 @@ pub struct Rig<H: HeldNotes = NoteTable> {
     pub now: Instant,
     /// Board writes made so far.
     pub writes: usize,
+    /// The outputs after each flush that changed any, with its time: one entry a flush, where
+    /// `timeline` has one a pin (and several flushes may share an instant).
+    pub states: Vec<(Instant, [u16; 4])>,
 }
 
 impl Rig<NoteTable> {
@@ -176,6 +179,7 @@ impl<H: HeldNotes> Rig<H> {
             last: [0; 4],
             now: Instant::ZERO,
             writes: 0,
+            states: Vec::new(),
         }
     }
 
@@ -209,6 +213,13 @@ impl<H: HeldNotes> Rig<H> {
             self.last[board as usize] = now;
         }
         self.boards.clear();
+        if self
+            .states
+            .last()
+            .map_or(self.last != [0; 4], |s| s.1 != self.last)
+        {
+            self.states.push((self.now, self.last));
+        }
     }
 
     /// Feeds `bytes` arriving at `t`, first running every deadline that falls due before `t`.
