@@ -118,5 +118,6 @@ pub fn thesis_config() -> orch_core::Config<MAX_BOARDS> {
         guard: t.guard,
         dynamics: t.dynamics,
         strikes: t.strikes,
+        wind: t.wind,
     }
 }

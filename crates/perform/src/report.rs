@@ -109,8 +109,11 @@ pub struct Dropped {
     pub range: u64,
     /// Past the power budget.
     pub power: u64,
-    /// A re-strike that could not sound within `late_limit`.
+    /// A re-strike that could not sound within `late_limit` (on a fingered group: a note
+    /// released before its fingers settled, taken over by the next).
     pub too_fast: u64,
+    /// A chord's note a one-voice (fingered) group did not play.
+    pub monophonic: u64,
     /// Struck too softly to sound: its duty below the key's softest (PWM keys only).
     pub too_soft: u64,
     /// A waiting re-strike cancelled (taken over, reset, watchdog).
@@ -128,6 +131,7 @@ impl Dropped {
             + self.range
             + self.power
             + self.too_fast
+            + self.monophonic
             + self.too_soft
             + self.cancelled
             + self.stopped
@@ -176,6 +180,7 @@ impl Outcomes {
                         orch_core::DropReason::Range => &mut d.range,
                         orch_core::DropReason::Power => &mut d.power,
                         orch_core::DropReason::TooFast => &mut d.too_fast,
+                        orch_core::DropReason::Monophonic => &mut d.monophonic,
                         orch_core::DropReason::Cancelled => &mut d.cancelled,
                         orch_core::DropReason::Stopped => &mut d.stopped,
                         orch_core::DropReason::TooSoft => &mut d.too_soft,
@@ -349,6 +354,9 @@ impl Report {
         }
         if d.unmapped > 0 {
             drums += &format!(", no drum for it {}", d.unmapped);
+        }
+        if d.monophonic > 0 {
+            drums += &format!(", one voice plays another {}", d.monophonic);
         }
         line(format!(
             "dropped                {} (channel {}{drums}, range {}, power budget {}, too fast {}{too_soft}, cancelled {}, stopped {})",

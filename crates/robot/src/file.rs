@@ -26,6 +26,7 @@ pub(crate) fn config_error(e: ConfigError) -> RobotError {
         ConfigError::BadDuty | ConfigError::DutyUnsupported => "guard.duty_max_on".to_string(),
         ConfigError::Dynamics(d) => dynamics_field(d),
         ConfigError::Strike(_) => "strike".to_string(),
+        ConfigError::Wind(_) => "fingered".to_string(),
     };
     RobotError::field(field, e.to_string())
 }
@@ -619,6 +620,7 @@ impl File {
             guard,
             dynamics,
             strikes: strikes.strikes,
+            wind: orch_core::Wind::NONE,
         };
         let mut groups = Vec::new();
         if k.enabled {

@@ -36,7 +36,7 @@ pub fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
     ));
     let d = &o.dropped;
     let budget = robot.config.guard.max_keys_down;
-    let counted: [(u64, String); 17] = [
+    let counted: [(u64, String); 18] = [
         (
             o.joined,
             "notes land on a key already down for another note and make no sound of their own"
@@ -73,6 +73,11 @@ pub fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
         (
             d.too_fast,
             "notes repeat a key too fast to strike it again within the late limit and will be dropped"
+                .into(),
+        ),
+        (
+            d.monophonic,
+            "notes are in chords the one-voice (fingered) group plays one note of, and will not be played"
                 .into(),
         ),
         (

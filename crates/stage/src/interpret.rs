@@ -168,13 +168,14 @@ impl End {
         let mut out = crate::messages::counters_text(&self.counters, self.truncated);
         let _ = write!(
             out,
-            "\n# {} notes: {} sounded ({} of them folded, {} joined a key already down), {} dropped (channel {}, range {}, power {}, too fast {}, cancelled {}, stopped {}); {} re-strikes waited for their key's rest; cut: {} by the hold limit, {} by the duty limit, {} by the watchdog; at most {} keys down\n",
+            "\n# {} notes: {} sounded ({} of them folded, {} joined a key already down), {} dropped (channel {}{}, range {}, power {}, too fast {}, cancelled {}, stopped {}); {} re-strikes waited for their key's rest; cut: {} by the hold limit, {} by the duty limit, {} by the watchdog; at most {} keys down\n",
             s.note_ons,
             s.played + s.folded,
             s.folded,
             s.joined,
             s.dropped(),
             s.dropped_channel,
+            group_drops(s),
             s.dropped_range,
             s.dropped_power,
             s.dropped_too_fast,
@@ -254,4 +255,18 @@ mod tests {
             "     61.600 ms  timer       0x22 <- 0x0100  |........#.......|"
         );
     }
+}
+
+/// The drop counts of strike and fingered groups, where there are any: `, percussion N,
+/// unmapped N, monophonic N` (the parts of `dropped` a keyboard alone never has).
+fn group_drops(s: &orch_core::Stats) -> String {
+    [
+        ("percussion", s.dropped_percussion),
+        ("unmapped", s.dropped_unmapped),
+        ("monophonic", s.dropped_monophonic),
+    ]
+    .iter()
+    .filter(|(_, n)| *n > 0)
+    .map(|(name, n)| format!(", {name} {n}"))
+    .collect()
 }
