@@ -113,20 +113,26 @@ pub mod analyze;
 mod envelope;
 mod error;
 pub mod fit;
+mod hits;
 mod listen;
 #[cfg(feature = "mic")]
 pub mod live;
 #[cfg(feature = "mic")]
 pub mod mic;
 mod onset;
+pub mod outputs;
+mod robot_strikes;
 pub mod robot_toml;
 pub mod score;
 mod spectrum;
+pub mod strikes;
 mod sync;
 pub mod synthetic;
 pub mod wav;
 
 pub use analyze::{analyze, Anchor, AnchorUsed, Calibration, KeyFigures, KeyResult, Level};
 pub use error::CalibrateError;
+pub use outputs::Output;
 pub use score::{Score, Strike};
+pub use strikes::{OutputFigures, OutputResult};
 pub use wav::Recording;
