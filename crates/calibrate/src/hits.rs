@@ -42,8 +42,10 @@ pub(crate) const LEVEL_MS: f64 = 30.0;
 /// The listening window before and after the expected onset, ms.
 pub(crate) const BEFORE_MS: f64 = 100.0;
 pub(crate) const AFTER_MS: f64 = 250.0;
-/// Robust standard deviations of the noise over its level at which the rise is timed.
+/// Robust standard deviations of the noise over its level at which the rise is timed ...
 const LOW_LAMBDA: f64 = 3.0;
+/// ... or this share of the way to the peak, if higher.
+const PEAK_SHARE: f64 = 0.05;
 
 /// What was heard of one hit.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,6 +56,8 @@ pub(crate) struct Hit {
     pub level_db: f64,
     /// How far the noise may move that level, dB.
     pub level_sigma_db: f64,
+    /// How far its peak energy stood over the level before it, dB.
+    pub over_db: f64,
 }
 
 /// The recording's energy at any sample, from a running sum of its squares.
@@ -133,7 +137,10 @@ impl Energy {
             .collect();
         let base = median(&mut before).max(floor);
         // The noise's scatter, in proportion where a tail raised the level before.
-        let low = base + (LOW_LAMBDA * sigma * base / floor.max(1e-20)).max(0.3 * base);
+        let low = base
+            + (LOW_LAMBDA * sigma * base / floor.max(1e-20))
+                .max(0.3 * base)
+                .max(PEAK_SHARE * (peak - base));
         let mut n = found;
         while n > from && self.at(n - 1) > low {
             n -= 1;
@@ -152,6 +159,7 @@ impl Energy {
             onset_ms: self.ms(onset),
             level_db: 10.0 * mean.log10() + 3.0103,
             level_sigma_db: crate::listen::level_sigma_db(mean, sigma, WINDOW_MS, LEVEL_MS),
+            over_db: 10.0 * (peak / base).log10(),
         })
     }
 }
