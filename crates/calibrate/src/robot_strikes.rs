@@ -69,3 +69,73 @@ pub(crate) fn loudness_comments(outputs: &[OutputResult]) -> String {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::analyze::{AnchorUsed, Calibration};
+    use crate::strikes::{OutputFigures, OutputResult};
+    use orch_robot::{BoardKind, Instrument, Robot};
+
+    fn output(strike: usize, index: usize, name: &str, flight: f64, full_db: f64) -> OutputResult {
+        OutputResult {
+            group: "g".into(),
+            name: name.into(),
+            key: index as u8,
+            strike,
+            index,
+            note: 79 + index as u8,
+            channel: 1,
+            levels: Vec::new(),
+            softest_velocity: Some(43),
+            problems: Vec::new(),
+            fit: Some(OutputFigures {
+                flight_ms: flight,
+                soft_flight_ms: flight + 5.0,
+                softest_percent: 50.0,
+                full_db,
+                dynamics: true,
+            }),
+        }
+    }
+
+    fn calibration(outputs: Vec<OutputResult>) -> Calibration {
+        Calibration {
+            capture_offset_ms: 0.0,
+            anchor: AnchorUsed {
+                note: 79,
+                press_delay_ms: 6.0,
+                given: true,
+            },
+            keys: Vec::new(),
+            outputs,
+            warnings: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_glockenspiel_gets_its_bars_median_flights_and_a_kit_each_outputs() {
+        let glock = crate::robot_toml::calibrated(
+            &orch_robot::instrument_toml(Instrument::Glockenspiel, BoardKind::Pwm),
+            &calibration(vec![
+                output(0, 0, "G5", 4.0, -10.0),
+                output(0, 1, "G#5", 7.0, -12.0),
+                output(0, 2, "A5", 9.0, -16.5),
+            ]),
+        )
+        .unwrap();
+        let robot = Robot::from_toml(&glock).unwrap();
+        let m = robot.mechanics.for_key(0);
+        assert_eq!(m.press_delay.as_micros(), 7000, "{glock}");
+        assert_eq!(m.soft_press_delay.as_micros(), 12_000);
+        assert!(glock.contains("G5 +0.0, G#5 -2.0, A5 -6.5"), "{glock}");
+        let drums = crate::robot_toml::calibrated(
+            &orch_robot::instrument_toml(Instrument::Drums, BoardKind::OnOff),
+            &calibration(vec![output(0, 1, "snare", 12.3, -3.0)]),
+        )
+        .unwrap();
+        let robot = Robot::from_toml(&drums).unwrap();
+        assert_eq!(robot.mechanics.for_key(1).press_delay.as_micros(), 12_300);
+        // An output not fitted keeps the file's flight (the kick: 15 ms).
+        assert_eq!(robot.mechanics.for_key(0).press_delay.as_micros(), 15_000);
+    }
+}

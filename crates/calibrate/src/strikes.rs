@@ -1,5 +1,5 @@
 //! The strike outputs' part of the analysis: each output's hits heard on the broadband
-//! energy ([`hits`](crate::hits)), its flight and loudness fitted.
+//! energy (the `hits` module), its flight and loudness fitted.
 //!
 //! The model is the virtual robot's, as for a key ([`fit`](crate::fit)): a strike at duty
 //! `d` sounds at or above the beater's softest duty, its flight is `flight` at full power and
