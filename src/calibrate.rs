@@ -31,11 +31,21 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
         std::fs::write(path, score.to_smf())
             .with_context(|| format!("writing {}", path.display()))?;
         let ms = score.length_ms();
+        let keys = score.keys().count();
+        let outputs = match score.outputs.len() {
+            0 => String::new(),
+            n if keys == 0 => format!("{n} strike outputs"),
+            n => format!(" and {n} strike outputs"),
+        };
+        let keys = if keys == 0 && !score.outputs.is_empty() {
+            String::new()
+        } else {
+            format!("{keys} keys")
+        };
         eprintln!(
-            "orch: calibration score written to {}: {} keys at {} levels ({:?}), {} min {} s; \
-             play it with `orch play {} --no-compensation --out ...` and record it",
+            "orch: calibration score written to {}: {keys}{outputs} at {} levels ({:?}), \
+             {} min {} s; play it with `orch play {} --no-compensation --out ...` and record it",
             path.display(),
-            score.high - score.low + 1,
             score.velocities.len(),
             score.velocities,
             ms / 60_000,
@@ -89,8 +99,8 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
     for w in &cal.warnings {
         eprintln!("orch: warning: {w}");
     }
-    for k in cal.keys_with_problems() {
-        eprintln!("orch: note {}: {}", k.note, k.problems.join("; "));
+    for line in cal.problem_lines() {
+        eprintln!("orch: {line}");
     }
     Ok(())
 }

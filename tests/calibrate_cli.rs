@@ -140,3 +140,57 @@ fn calibrate_refuses_a_bad_recording_with_exit_2_and_no_robot_toml() {
         .code(2)
         .stderr(predicates::str::contains("NOTE=MS"));
 }
+
+#[test]
+fn calibrate_a_drum_kit_writes_its_score_and_fits_each_outputs_flight() {
+    use orch_calibrate::synthetic::kit;
+    let d = dir("drums");
+    let text =
+        orch_robot::instrument_toml(orch_robot::Instrument::Drums, orch_robot::BoardKind::Pwm);
+    std::fs::write(d.join("kit.toml"), &text).unwrap();
+    orch()
+        .args(["calibrate", "--score"])
+        .arg(d.join("kit.mid"))
+        .arg("--robot")
+        .arg(d.join("kit.toml"))
+        .assert()
+        .success()
+        .stderr(predicates::str::contains("9 strike outputs at 4 levels"));
+    let robot = orch_robot::Robot::from_toml(&text).unwrap();
+    let score = Score::for_robot(&robot, 4).unwrap();
+    let hidden = kit::hidden_outputs(&score, &robot, 5);
+    let room = Room {
+        rate: 48_000,
+        capture_offset_ms: 600.0,
+        snr_db: Some(30.0),
+        reverb: true,
+        thump: None,
+        seed: 5,
+    };
+    kit::record(&score, &robot, &[], &hidden, &room)
+        .write(std::fs::File::create(d.join("kit.wav")).unwrap())
+        .unwrap();
+    let out = orch()
+        .args(["calibrate", "--wav"])
+        .arg(d.join("kit.wav"))
+        .arg("--robot")
+        .arg(d.join("kit.toml"))
+        .args([
+            "--anchor",
+            &format!("38={:.3}", hidden[1].beater.press_delay_ms),
+        ])
+        .assert()
+        .success();
+    let toml = String::from_utf8(out.get_output().stdout.clone()).unwrap();
+    let calibrated = orch_robot::Robot::from_toml(&toml).unwrap();
+    for (o, h) in score.outputs.iter().zip(&hidden) {
+        let got = calibrated.mechanics.for_key(o.key).press_delay.as_micros() as f64 / 1000.0;
+        assert!(
+            (got - h.beater.press_delay_ms).abs() < 0.6,
+            "{}: {got} vs {:?}",
+            o.name,
+            h.beater
+        );
+    }
+    assert!(toml.contains("drums: loudness at full power"), "{toml}");
+}

@@ -5,6 +5,7 @@ use serde::Serialize;
 use crate::fit::{fit, Fit, Measured};
 use crate::listen::listen;
 use crate::score::{Part, Score};
+use crate::strikes::{analyze_outputs, OutputResult};
 use crate::wav::Recording;
 use crate::{onset, sync, CalibrateError};
 
@@ -119,6 +120,9 @@ pub struct Calibration {
     pub anchor: AnchorUsed,
     /// Every key of the robot, lowest first.
     pub keys: Vec<KeyResult>,
+    /// Every strike output of the robot, in key order (left out of the JSON when none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub outputs: Vec<OutputResult>,
     /// What looks wrong with the recording as a whole (strikes after the score's end).
     pub warnings: Vec<String>,
 }
@@ -128,10 +132,24 @@ impl Calibration {
     pub fn keys_with_problems(&self) -> impl Iterator<Item = &KeyResult> {
         self.keys.iter().filter(|k| !k.problems.is_empty())
     }
+
+    /// Every problem, one line each: `note 60: …` for a key, `kick (note 35): …` for a
+    /// strike output.
+    pub fn problem_lines(&self) -> Vec<String> {
+        let keys = self
+            .keys_with_problems()
+            .map(|k| format!("note {}: {}", k.note, k.problems.join("; ")));
+        let outputs = self
+            .outputs
+            .iter()
+            .filter(|o| !o.problems.is_empty())
+            .map(|o| format!("{} (note {}): {}", o.name, o.note, o.problems.join("; ")));
+        keys.chain(outputs).collect()
+    }
 }
 
 /// A figure rounded to hundredths, as JSON.
-fn hundredths<S: serde::Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+pub(crate) fn hundredths<S: serde::Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_f64((v * 100.0).round() / 100.0)
 }
 
@@ -211,7 +229,7 @@ pub fn analyze(
         });
     }
     if let Some(a) = anchor {
-        if !(score.low..=score.high).contains(&a.note) {
+        if !score.keys().contains(&a.note) && !score.outputs.iter().any(|o| o.note == a.note) {
             return Err(CalibrateError::Anchor(format!(
                 "note {} is not one of the robot's keys ({}..={})",
                 a.note, score.low, score.high
@@ -241,7 +259,7 @@ pub fn analyze(
     let low = score.low;
     let mut keys = Vec::new();
     let mut fits: Vec<Option<Fit>> = Vec::new();
-    for note in score.low..=score.high {
+    for note in score.keys() {
         let strikes: Vec<_> = schedule
             .iter()
             .filter(|s| s.part == Part::Key && s.note == note)
@@ -365,37 +383,9 @@ pub fn analyze(
             }),
         });
     }
-    // Pin the delays: the anchor's, or the robot file's value for middle C (or the key
-    // nearest it that sounded).
-    let used = match anchor {
-        Some(a) => AnchorUsed {
-            note: a.note,
-            press_delay_ms: a.press_delay_ms,
-            given: true,
-        },
-        None => {
-            let mid = 60u8.clamp(score.low, score.high);
-            let note = (score.low..=score.high)
-                .filter(|&n| fits[usize::from(n - low)].is_some())
-                .min_by_key(|&n| (i16::from(n) - i16::from(mid)).abs())
-                .ok_or(CalibrateError::NothingHeard)?;
-            AnchorUsed {
-                note,
-                press_delay_ms: robot.mechanics.for_key(note - low).press_delay.as_micros() as f64
-                    / 1000.0,
-                given: false,
-            }
-        }
-    };
-    let measured_anchor = fits[usize::from(used.note - low)]
-        .ok_or_else(|| {
-            CalibrateError::Anchor(format!(
-                "key {} made no sound, so it cannot anchor the delays; give another key",
-                used.note
-            ))
-        })?
-        .press_delay_ms;
-    let shift = used.press_delay_ms - measured_anchor;
+    let mut outputs = analyze_outputs(&rec.samples, rec.rate, robot, score, offset);
+    let used = pin(anchor, robot, score, &fits, &outputs)?;
+    let shift = used.0.press_delay_ms - used.1;
     for k in &mut keys {
         for l in &mut k.levels {
             if let Some(d) = &mut l.press_delay_ms {
@@ -407,10 +397,96 @@ pub fn analyze(
             f.soft_press_delay_ms += shift;
         }
     }
+    for o in &mut outputs {
+        for l in &mut o.levels {
+            if let Some(d) = &mut l.press_delay_ms {
+                *d += shift;
+            }
+        }
+        if let Some(f) = &mut o.fit {
+            f.flight_ms += shift;
+            f.soft_flight_ms += shift;
+        }
+    }
     Ok(Calibration {
         capture_offset_ms: offset - shift,
-        anchor: used,
+        anchor: used.0,
         keys,
+        outputs,
         warnings,
     })
+}
+
+/// What pins the delays, and its delay as measured (on the analysis' clock): the anchor's
+/// key or strike output; without one, the robot file's press delay for middle C (or the
+/// key nearest it that sounded), or on a robot without keys the file's flight of its first
+/// strike output that sounded.
+fn pin(
+    anchor: Option<Anchor>,
+    robot: &orch_robot::Robot,
+    score: &Score,
+    fits: &[Option<Fit>],
+    outputs: &[OutputResult],
+) -> Result<(AnchorUsed, f64), CalibrateError> {
+    let low = score.low;
+    let key_fit = |n: u8| {
+        score
+            .keys()
+            .contains(&n)
+            .then(|| fits[usize::from(n - low)].map(|f| f.press_delay_ms))
+    };
+    let output_fit = |n: u8| {
+        outputs
+            .iter()
+            .find(|o| o.note == n)
+            .map(|o| o.fit.map(|f| f.flight_ms))
+    };
+    let ms = |d: orch_core::Duration| d.as_micros() as f64 / 1000.0;
+    let used = match anchor {
+        Some(a) => AnchorUsed {
+            note: a.note,
+            press_delay_ms: a.press_delay_ms,
+            given: true,
+        },
+        None => {
+            let mid = 60u8.clamp(score.low, score.high);
+            let key = score
+                .keys()
+                .filter(|&n| fits[usize::from(n - low)].is_some())
+                .min_by_key(|&n| (i16::from(n) - i16::from(mid)).abs());
+            match key {
+                Some(note) => AnchorUsed {
+                    note,
+                    press_delay_ms: ms(robot.mechanics.for_key(note - low).press_delay),
+                    given: false,
+                },
+                None => {
+                    let o = outputs
+                        .iter()
+                        .find(|o| o.fit.is_some())
+                        .ok_or(CalibrateError::NothingHeard)?;
+                    AnchorUsed {
+                        note: o.note,
+                        press_delay_ms: ms(robot.mechanics.for_key(o.key).press_delay),
+                        given: false,
+                    }
+                }
+            }
+        }
+    };
+    let measured = key_fit(used.note)
+        .or_else(|| output_fit(used.note))
+        .flatten()
+        .ok_or_else(|| {
+            let what = if score.keys().contains(&used.note) {
+                "key"
+            } else {
+                "the strike output of note"
+            };
+            CalibrateError::Anchor(format!(
+                "{what} {} made no sound, so it cannot anchor the delays; give another key",
+                used.note
+            ))
+        })?;
+    Ok((used, measured))
 }

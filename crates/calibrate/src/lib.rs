@@ -20,6 +20,17 @@
 //!    [`robot_toml::calibrated`], the input robot.toml with `[[mechanics.key]]` and
 //!    `[[dynamics.key]]` filled in.
 //!
+//! # Strike outputs
+//! A robot's `[[strike]]` outputs (drums, bars) are struck after the keys, level by level, 3 s
+//! apart ([`score`]; a robot without keys syncs on three of them, [`outputs`] says which note
+//! and channel strike each). A drum has no partials: each hit is heard on the recording's
+//! broadband energy (2 ms windows, the start of the rise over the noise: `hits`), fitted as a
+//! key is, its flight line on the hits 20 dB or more over the noise ([`strikes`]), and written
+//! as each `[[strike.output]]`'s `flight`/`soft_flight` (a pitched group: its bars' median in
+//! its `[[strike]]`), the outputs' loudness as a comment. [`synthetic::kit`] makes synthetic
+//! drum recordings (`tests/strikes.rs`, `--example strikes`); `--example rendered_drums`
+//! renders the kit through TimGM6mb.
+//!
 //! # Onsets
 //! The sync figure is found on broadband onsets: spectral flux on log-compressed magnitudes,
 //! half-wave rectified, with an adaptive threshold and peak picking (Dixon 2006, "Onset
@@ -113,20 +124,26 @@ pub mod analyze;
 mod envelope;
 mod error;
 pub mod fit;
+mod hits;
 mod listen;
 #[cfg(feature = "mic")]
 pub mod live;
 #[cfg(feature = "mic")]
 pub mod mic;
 mod onset;
+pub mod outputs;
+mod robot_strikes;
 pub mod robot_toml;
 pub mod score;
 mod spectrum;
+pub mod strikes;
 mod sync;
 pub mod synthetic;
 pub mod wav;
 
 pub use analyze::{analyze, Anchor, AnchorUsed, Calibration, KeyFigures, KeyResult, Level};
 pub use error::CalibrateError;
+pub use outputs::Output;
 pub use score::{Score, Strike};
+pub use strikes::{OutputFigures, OutputResult};
 pub use wav::Recording;

@@ -7,7 +7,7 @@
 //! sounds when the fit is a little low), `loudest` = 100 % (velocity 127 at full power: then the loudness heard is the
 //! velocity asked) and `hold` (the file's, lowered to the softest if it was above it). Other
 //! fields of a key's entries are kept; keys not fitted keep what the file gave them.
-//! Comments of the input file are not kept.
+//! Comments of the input file are not kept. Strike outputs: see `robot_strikes`.
 
 use crate::analyze::Calibration;
 use crate::CalibrateError;
@@ -109,6 +109,7 @@ pub fn calibrated(input: &str, cal: &Calibration) -> Result<String, CalibrateErr
             d.insert("hold".into(), pct(hold.min(softest)));
         }
     }
+    crate::robot_strikes::write(&mut doc, &cal.outputs);
     let by_note = |t: &Table| t.get("note").and_then(Value::as_integer).unwrap_or(0);
     mech.sort_by_key(by_note);
     dyns.sort_by_key(by_note);
@@ -139,8 +140,9 @@ pub fn calibrated(input: &str, cal: &Calibration) -> Result<String, CalibrateErr
     for w in &cal.warnings {
         head += &format!("# WARNING: {w}\n");
     }
-    for k in cal.keys_with_problems() {
-        head += &format!("# note {}: {}\n", k.note, k.problems.join("; "));
+    head += &crate::robot_strikes::loudness_comments(&cal.outputs);
+    for line in cal.problem_lines() {
+        head += &format!("# {line}\n");
     }
     let text = format!("{head}\n{body}");
     orch_robot::Robot::from_toml(&text).map_err(|e| {

@@ -1,8 +1,10 @@
-//! The calibration score: the sync figure, then every key alone at each velocity level.
+//! The calibration score: the sync figure, then every key alone at each velocity level,
+//! then every strike output (a drum, a bar) alone at each level.
 //!
 //! Times are in ms from the score's start; the SMF has 1000 ticks a quarter note at
 //! 60 BPM, so one tick is one ms.
 
+use crate::outputs::{strike_outputs, Output};
 use crate::CalibrateError;
 
 /// The sync figure's strike times, ms from the first: the marks of a Golomb ruler
@@ -22,6 +24,12 @@ pub const FIRST_STRIKE_MS: u32 = LEAD_IN_MS + 4000;
 /// to 80 ms) and the damper's ring-down to the noise (about 500 ms), so each strike is heard
 /// alone in its own window.
 pub const SPACING_MS: u32 = 1000;
+/// From one strike of a strike output to the next: a drum or a cymbal rings far longer than
+/// a damped string (a crash for seconds), so each gets 3 s: a crash struck hard (its noise
+/// decaying in 1–1.5 s) is 20 dB down by then, 14 dB at 2 s, where a ride struck after it
+/// 12 dB softer went unheard. Listening counts only rises, and the noise frames before each
+/// strike hold what still rings, so a tail is part of the noise, not a strike.
+pub const STRIKE_SPACING_MS: u32 = 3000;
 /// How long each strike's note is held: longer than `dynamics.strike` (40 ms) so the whole
 /// strike phase plays, short enough that the damper stops the string well before the next.
 pub const NOTE_MS: u32 = 150;
@@ -35,6 +43,8 @@ pub enum Part {
     Sync(usize),
     /// A key's strike at one of the levels.
     Key,
+    /// A strike output's strike at one of the levels (index in [`Score::outputs`]).
+    Strike(usize),
 }
 
 /// One strike the score asks for.
@@ -42,6 +52,10 @@ pub enum Part {
 pub struct Strike {
     /// The MIDI note.
     pub note: u8,
+    /// The channel, 0..=15 (0 for keys).
+    pub channel: u8,
+    /// The strike output struck (index in [`Score::outputs`]), `None` for a key.
+    pub output: Option<usize>,
     /// Its velocity, 1..=127.
     pub velocity: u8,
     /// When it is asked, ms from the score's start.
@@ -59,6 +73,10 @@ pub struct Score {
     pub high: u8,
     /// The velocities each key is struck at, softest first.
     pub velocities: Vec<u8>,
+    /// Whether the robot has a keyboard: without one the score strikes only its outputs.
+    pub keyboard: bool,
+    /// The strike outputs, struck after the keys at the same velocities.
+    pub outputs: Vec<Output>,
 }
 
 impl Score {
@@ -79,13 +97,33 @@ impl Score {
             low: low.min(high),
             high: high.max(low),
             velocities,
+            keyboard: true,
+            outputs: Vec::new(),
         })
     }
 
-    /// The score for a robot's keys.
+    /// The score for a robot's keys (if it has a keyboard) and strike outputs.
     pub fn for_robot(robot: &orch_robot::Robot, levels: u32) -> Result<Self, CalibrateError> {
         let r = robot.config.range;
-        Self::new(r.low().get(), r.high().get(), levels)
+        let keyboard = robot
+            .groups
+            .iter()
+            .any(|g| g.kind == orch_robot::GroupKind::Keyboard);
+        Ok(Self {
+            keyboard,
+            outputs: strike_outputs(robot),
+            ..Self::new(r.low().get(), r.high().get(), levels)?
+        })
+    }
+
+    /// The keys struck: `low..=high`, none without a keyboard.
+    #[allow(clippy::reversed_empty_ranges)] // empty on purpose: no keyboard, no keys
+    pub fn keys(&self) -> std::ops::RangeInclusive<u8> {
+        if self.keyboard {
+            self.low..=self.high
+        } else {
+            1..=0
+        }
     }
 
     /// The sync figure's notes, one per mark: three keys at a quarter, a half and three
@@ -97,26 +135,50 @@ impl Score {
         [b, a, c, b, a]
     }
 
+    /// The sync figure's strikes as (channel, note, output): on the keys ([`sync_notes`](
+    /// Self::sync_notes)), or without a keyboard on three strike outputs at a quarter, a half
+    /// and three quarters of their list.
+    pub fn sync_targets(&self) -> [(u8, u8, Option<usize>); 5] {
+        if self.keyboard || self.outputs.is_empty() {
+            return self.sync_notes().map(|n| (0, n, None));
+        }
+        let n = self.outputs.len();
+        let at = |num: usize| {
+            let i = (n * num / 4).min(n - 1);
+            let o = &self.outputs[i];
+            (o.channel, o.note, Some(i))
+        };
+        let (a, b, c) = (at(1), at(2), at(3));
+        [b, a, c, b, a]
+    }
+
     /// Every strike, in time order: the figure, then each key from the lowest, its levels
-    /// softest first (a strike then follows a softer one of its own key, or a neighbour's).
+    /// softest first (a strike then follows a softer one of its own key, or a neighbour's),
+    /// then the strike outputs level by level, softest first, each level on every output
+    /// in key order, [`STRIKE_SPACING_MS`] apart: a soft hit never follows a loud cymbal's
+    /// tail.
     pub fn schedule(&self) -> Vec<Strike> {
         let mut out: Vec<Strike> = self
-            .sync_notes()
+            .sync_targets()
             .iter()
             .zip(SYNC_MARKS_MS)
             .enumerate()
-            .map(|(i, (&note, mark))| Strike {
+            .map(|(i, (&(channel, note, output), mark))| Strike {
                 note,
+                channel,
+                output,
                 velocity: SYNC_VELOCITY,
                 at_ms: LEAD_IN_MS + mark,
                 part: Part::Sync(i),
             })
             .collect();
         let mut at = FIRST_STRIKE_MS;
-        for note in self.low..=self.high {
+        for note in self.keys() {
             for &velocity in &self.velocities {
                 out.push(Strike {
                     note,
+                    channel: 0,
+                    output: None,
                     velocity,
                     at_ms: at,
                     part: Part::Key,
@@ -124,12 +186,30 @@ impl Score {
                 at += SPACING_MS;
             }
         }
+        for &velocity in &self.velocities {
+            for (i, o) in self.outputs.iter().enumerate() {
+                out.push(Strike {
+                    note: o.note,
+                    channel: o.channel,
+                    output: Some(i),
+                    velocity,
+                    at_ms: at,
+                    part: Part::Strike(i),
+                });
+                at += STRIKE_SPACING_MS;
+            }
+        }
         out
     }
 
     /// The score's length, ms: the last strike plus one spacing for it to ring down.
     pub fn length_ms(&self) -> u32 {
-        self.schedule().last().map_or(0, |s| s.at_ms) + SPACING_MS
+        let last = self.schedule().last().copied();
+        let ring = match last.map(|s| s.part) {
+            Some(Part::Strike(_)) => STRIKE_SPACING_MS,
+            _ => SPACING_MS,
+        };
+        last.map_or(0, |s| s.at_ms) + ring
     }
 
     /// The length from the first sync strike to the end, ms: what a recording must hold.
@@ -137,19 +217,20 @@ impl Score {
         self.length_ms() - LEAD_IN_MS
     }
 
-    /// The score as a Standard MIDI File (format 0, channel 1, 1 tick = 1 ms).
+    /// The score as a Standard MIDI File (format 0, 1 tick = 1 ms): keys on channel 1, each
+    /// strike output on its own channel.
     pub fn to_smf(&self) -> Vec<u8> {
         use midly::num::{u15, u24, u28, u4, u7};
         use midly::{
             Format, Header, MetaMessage, MidiMessage, Smf, Timing, TrackEvent, TrackEventKind,
         };
-        // (time, is_on, note, velocity): Note-Offs before Note-Ons at the same time.
-        let mut events: Vec<(u32, bool, u8, u8)> = Vec::new();
+        // (time, is_on, note, velocity, channel): Note-Offs before Note-Ons at the same time.
+        let mut events: Vec<(u32, bool, u8, u8, u8)> = Vec::new();
         for s in self.schedule() {
-            events.push((s.at_ms, true, s.note, s.velocity));
-            events.push((s.at_ms + NOTE_MS, false, s.note, 0));
+            events.push((s.at_ms, true, s.note, s.velocity, s.channel));
+            events.push((s.at_ms + NOTE_MS, false, s.note, 0, s.channel));
         }
-        events.sort_by_key(|&(t, on, note, _)| (t, on, note));
+        events.sort_by_key(|&(t, on, note, _, channel)| (t, on, note, channel));
         let mut track = vec![
             TrackEvent {
                 delta: u28::new(0),
@@ -161,7 +242,7 @@ impl Score {
             },
         ];
         let mut last = 0;
-        for (t, on, note, velocity) in events {
+        for (t, on, note, velocity, channel) in events {
             let message = if on {
                 MidiMessage::NoteOn {
                     key: u7::new(note),
@@ -176,7 +257,7 @@ impl Score {
             track.push(TrackEvent {
                 delta: u28::new(t - last),
                 kind: TrackEventKind::Midi {
-                    channel: u4::new(0),
+                    channel: u4::new(channel),
                     message,
                 },
             });
@@ -240,6 +321,34 @@ mod tests {
         assert!(notes.iter().all(|n| (36..=96).contains(n)));
         // 61 keys at 4 levels: 4 min 9 s.
         assert_eq!(s.length_ms(), 5000 + 244 * 1000);
+    }
+
+    #[test]
+    fn strike_outputs_follow_the_keys_and_a_kit_alone_syncs_on_its_outputs() {
+        let drums =
+            orch_robot::instrument_toml(orch_robot::Instrument::Drums, orch_robot::BoardKind::Pwm);
+        let robot = orch_robot::Robot::from_toml(&drums).unwrap();
+        let s = Score::for_robot(&robot, 4).unwrap();
+        assert!(!s.keyboard);
+        let sched = s.schedule();
+        assert_eq!(sched.len(), 5 + 9 * 4);
+        assert!(sched[..5]
+            .iter()
+            .all(|x| x.channel == 9 && x.output.is_some()));
+        let hits: Vec<_> = sched[5..].iter().collect();
+        assert!(hits
+            .windows(2)
+            .all(|w| w[1].at_ms - w[0].at_ms == STRIKE_SPACING_MS));
+        assert_eq!(
+            (hits[0].part, hits[1].part),
+            (Part::Strike(0), Part::Strike(1))
+        );
+        assert_eq!((hits[0].note, hits[35].note), (35, 51));
+        assert_eq!((hits[0].velocity, hits[9].velocity), (1, 43));
+        assert_eq!(s.length_ms(), FIRST_STRIKE_MS + 36 * STRIKE_SPACING_MS);
+        // A keyboard robot's score is unchanged.
+        let piano = Score::for_robot(&orch_robot::Robot::thesis(), 4).unwrap();
+        assert_eq!(piano, Score::new(36, 96, 4).unwrap());
     }
 
     #[test]

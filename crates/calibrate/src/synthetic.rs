@@ -17,6 +17,7 @@
 //!   as the string, its amplitude), or a solenoid's ([`Thump::Solenoid`], [`Solenoid`]): a
 //!   click and the case's low-frequency thud, 2–5 ms before the string, its level set by the
 //!   solenoid's drive rather than by the string's loudness.
+//! - **A strike robot's outputs** ([`kit`]): drums, each a noise burst and a damped tone.
 //! - **The room** ([`Room`]): the capture offset (the recording starts that long before the
 //!   score), an optional **reverberation** (four parallel feedback combs of 29.7, 37.1, 41.1
 //!   and 43.7 ms with a 0.6 s reverberation time, mixed at 30 %: a decaying tail, and echoes
@@ -25,6 +26,8 @@
 
 use crate::score::{Score, NOTE_MS};
 use crate::wav::Recording;
+
+pub mod kit;
 
 /// One key of the hidden robot.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -251,6 +254,7 @@ pub fn onsets(
         .schedule()
         .iter()
         .enumerate()
+        .filter(|(_, s)| s.output.is_none())
         .filter_map(|(i, s)| {
             let k = &keys[usize::from(s.note - score.low)];
             let d = duty(robot, s.note, s.velocity);
@@ -291,11 +295,26 @@ pub fn record_strikes(
     keys: &[HiddenKey],
     room: &Room,
 ) -> Recording {
+    let mut rng = Rng::new(room.seed ^ 0x5EED);
+    let x = strings(schedule, low, length_ms, robot, keys, room, &mut rng);
+    in_room(x, room, &mut rng)
+}
+
+/// The strings (and thumps) of `schedule`'s strikes, dry, `length_ms` from the score's time
+/// 0 plus the capture offset and 500 ms.
+pub(crate) fn strings(
+    schedule: &[crate::Strike],
+    low: u8,
+    length_ms: f64,
+    robot: &orch_robot::Robot,
+    keys: &[HiddenKey],
+    room: &Room,
+    rng: &mut Rng,
+) -> Vec<f64> {
     let rate = f64::from(room.rate);
     let total_ms = length_ms + room.capture_offset_ms + 500.0;
     let mut x = vec![0.0f64; (total_ms / 1000.0 * rate) as usize];
-    let mut rng = Rng::new(room.seed ^ 0x5EED);
-    for s in schedule {
+    for s in schedule.iter().filter(|s| s.output.is_none()) {
         let k = &keys[usize::from(s.note - low)];
         let d = duty(robot, s.note, s.velocity);
         if !k.sounds_at(d) {
@@ -353,11 +372,17 @@ pub fn record_strikes(
             }
             Some(Thump::Solenoid(t)) => {
                 let a = k.gain * STRING_RMS * 10f64.powf(t.level_db / 20.0) * d;
-                t.add(&mut x, rate, start, a, &mut rng);
+                t.add(&mut x, rate, start, a, rng);
             }
             None => {}
         }
     }
+    x
+}
+
+/// `x` in the room: its reverberation and noise (drawn from `rng`), as a recording.
+pub(crate) fn in_room(mut x: Vec<f64>, room: &Room, rng: &mut Rng) -> Recording {
+    let rate = f64::from(room.rate);
     if room.reverb {
         let mut wet = vec![0.0f64; x.len()];
         for delay_ms in [29.7, 37.1, 41.1, 43.7] {

@@ -321,6 +321,8 @@ fn bad_recordings_are_refused_with_their_reason() {
     let scale: Vec<Strike> = (0..200u32)
         .map(|i| Strike {
             note: 60 + (i % 12) as u8,
+            channel: 0,
+            output: None,
             velocity: 127,
             at_ms: 1000 + 150 * i,
             part: orch_calibrate::score::Part::Key,
