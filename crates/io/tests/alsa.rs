@@ -9,9 +9,9 @@ use alsa::seq::{Addr, MidiEvent, PortCap, PortInfo, PortType};
 use orch_io::alsa_seq::{event_bytes, seq_events, AlsaIn, AlsaOut};
 use orch_io::{InEvent, InTarget, MidiIn};
 use orch_perform::{
-    perform, song_events, thesis_config, Link, MidiOut, MidiRecording, Setup, Tempo,
+    song_events, thesis_config, Link, MidiOut, MidiRecording, Performer, Setup, Tempo,
 };
-use orch_seq::{Song, VirtualClock};
+use orch_seq::Song;
 
 /// The messages the performer sends for a piece, each whole (running status undone).
 fn messages() -> Vec<Vec<u8>> {
@@ -25,16 +25,10 @@ fn messages() -> Vec<Vec<u8>> {
         link: Link::Direct,
     };
     let mut rec = MidiRecording::default();
-    perform(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        Some(&mut rec),
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    Performer::new(&setup, song_events(&song), song.notes())
+        .midi(&mut rec)
+        .run()
+        .unwrap();
     let mut status = 0;
     rec.sent
         .into_iter()

@@ -11,8 +11,8 @@ use std::time::Duration;
 use embedded_hal::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
 use orch_core::Instant;
 use orch_io::{BoardStats, BoardsOut, TimedBus};
-use orch_perform::{perform, song_events, thesis_config, Link, Setup, Tempo};
-use orch_seq::{Song, VirtualClock};
+use orch_perform::{song_events, thesis_config, Link, Performer, Setup, Tempo};
+use orch_seq::Song;
 use orch_sim::{BusError, Keep, SimConfig, VirtualRobot};
 
 /// A fault the bus injects.
@@ -175,16 +175,10 @@ fn run(faults: Vec<Fault>) -> Run {
         link: Link::Direct,
     };
     let mut out = BoardsOut::new(setup.config, FaultyBus::new(faults)).unwrap();
-    let played = perform(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        Some(&mut out),
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .expect("a bad bus never stops the performance");
+    let played = Performer::new(&setup, song_events(&song), song.notes())
+        .midi(&mut out)
+        .run()
+        .expect("a bad bus never stops the performance");
     let stats = out.boards().stats();
     let bus = out.boards().set().bus();
     let writes = bus
@@ -359,15 +353,9 @@ fn a_panic_in_the_middle_of_a_piece_lets_go_of_every_finger_as_it_unwinds() {
     let out = BoardsOut::new(setup.config, bus).unwrap();
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         let mut out = PanicAt { inner: out, n: 301 };
-        let _ = perform(
-            &setup,
-            song_events(&song),
-            song.notes(),
-            Some(&mut out),
-            &mut VirtualClock::new(),
-            None,
-            None,
-        );
+        let _ = Performer::new(&setup, song_events(&song), song.notes())
+            .midi(&mut out)
+            .run();
     }));
     assert!(result.is_err());
     // (Without the release on drop, keys are down here: the test fails.)
@@ -410,16 +398,12 @@ fn stopping_during_a_chord_lets_every_finger_up_before_the_performance_returns()
             stopper.stop();
         }
     };
-    let played = perform(
-        &setup,
-        ev.into_iter(),
-        4,
-        Some(&mut out),
-        &mut VirtualClock::new(),
-        Some(&control),
-        Some(&mut on_live),
-    )
-    .unwrap();
+    let played = Performer::new(&setup, ev.into_iter(), 4)
+        .control(&control)
+        .midi(&mut out)
+        .live(&mut on_live)
+        .run()
+        .unwrap();
     assert!(played.stopped);
     assert_eq!(
         down_before_stop, 4,

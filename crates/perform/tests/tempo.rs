@@ -5,9 +5,9 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use orch_perform::{
-    perform, song_events, thesis_config, Control, Link, Live, MidiRecording, Setup, Tempo,
+    song_events, thesis_config, Control, Link, Live, MidiRecording, Performer, Setup, Tempo,
 };
-use orch_seq::{Song, VirtualClock};
+use orch_seq::Song;
 
 mod common;
 use common::{note_ons, note_ons_at, ActAt};
@@ -42,16 +42,12 @@ fn a_tempo_change_mid_piece_plays_every_note_once_in_order() {
         }
     };
     let mut out = MidiRecording::default();
-    let played = perform(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        Some(&mut out),
-        &mut VirtualClock::new(),
-        Some(&control),
-        Some(&mut live),
-    )
-    .unwrap();
+    let played = Performer::new(&setup, song_events(&song), song.notes())
+        .control(&control)
+        .midi(&mut out)
+        .live(&mut live)
+        .run()
+        .unwrap();
     assert!(changed);
     let r = played.report(None);
     assert!(r.adds_up(), "{r:?}");
@@ -129,16 +125,13 @@ fn pause_and_resume(link: Link, midi: bool) {
         }
     };
     let mut out = MidiRecording::default();
-    let played = perform(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        midi.then_some(&mut out),
-        &mut VirtualClock::new(),
-        Some(&control),
-        Some(&mut live),
-    )
-    .unwrap();
+    let mut performer = Performer::new(&setup, song_events(&song), song.notes())
+        .control(&control)
+        .live(&mut live);
+    if midi {
+        performer = performer.midi(&mut out);
+    }
+    let played = performer.run().unwrap();
     assert_eq!(paused_views, 25);
     let held = at_pause.unwrap();
     // It went on from where it paused: the first view after comes within two wakes (80 ms)
@@ -212,16 +205,12 @@ fn a_change_after_an_early_press_counts_the_note_it_made_late() {
         c.set_tempo(Tempo::new(3.0).unwrap())
     });
     let mut live = |_: &Live| {};
-    let played = perform::<_, MidiRecording>(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        None,
-        &mut clock,
-        Some(&control),
-        Some(&mut live),
-    )
-    .unwrap();
+    let played = Performer::new(&setup, song_events(&song), song.notes())
+        .clock(&mut clock)
+        .control(&control)
+        .live(&mut live)
+        .run()
+        .unwrap();
     assert!(clock.done());
     let r = played.report(None);
     assert!(r.adds_up(), "{r:?}");

@@ -9,9 +9,9 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use orch_perform::{perform, song_events, Link, MidiRecording, Setup, Tempo};
+use orch_perform::{song_events, Link, Performer, Setup, Tempo};
 use orch_render::{events, soundfont, synth, Settings};
-use orch_seq::{Song, VirtualClock};
+use orch_seq::Song;
 
 fn main() {
     let mut args = std::env::args().skip(1);
@@ -47,16 +47,9 @@ fn main() {
         load
     );
     let t = Instant::now();
-    let played = perform::<_, MidiRecording>(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        None,
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    let played = Performer::new(&setup, song_events(&song), song.notes())
+        .run()
+        .unwrap();
     let keys = events::from_performance(&played.performance, played.start_us, 36).unwrap();
     let perform_s = t.elapsed().as_secs_f64();
     for (what, keys, before) in [

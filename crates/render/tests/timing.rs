@@ -5,9 +5,9 @@
 
 mod support;
 
-use orch_perform::{perform, song_events, Link, MidiRecording, Played, Setup, Tempo};
+use orch_perform::{song_events, Link, Performer, Played, Setup, Tempo};
 use orch_render::{events, onset, synth, Settings};
-use orch_seq::{Song, VirtualClock};
+use orch_seq::Song;
 
 const RATE: u32 = 44_100;
 
@@ -53,16 +53,9 @@ fn play(song: &Song, config: orch_core::Config<{ orch_perform::MAX_BOARDS }>) ->
         tempo: Tempo::NORMAL,
         link: Link::Direct,
     };
-    perform::<_, MidiRecording>(
-        &setup,
-        song_events(song),
-        song.notes(),
-        None,
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap()
+    Performer::new(&setup, song_events(song), song.notes())
+        .run()
+        .unwrap()
 }
 
 /// The render of `played` with the test font, both channels.

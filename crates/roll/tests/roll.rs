@@ -299,16 +299,10 @@ fn a_performance_that_kept_no_sounds_is_refused() {
         tempo: orch_perform::Tempo::NORMAL,
         link: orch_perform::Link::Direct,
     };
-    let played = orch_perform::perform::<_, orch_perform::MidiRecording>(
-        &setup,
-        orch_perform::song_events(&song),
-        song.notes(),
-        None,
-        &mut orch_seq::VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    let played =
+        orch_perform::Performer::new(&setup, orch_perform::song_events(&song), song.notes())
+            .run()
+            .unwrap();
     assert_eq!(
         orch_roll::build::roll(&song, &played, (36, 96), 1.0, "x"),
         Err(orch_roll::build::BuildError::NoSounds)
@@ -357,16 +351,9 @@ fn a_performance_of_only_some_of_the_songs_notes_is_refused() {
         tempo: orch_perform::Tempo::NORMAL,
         link: orch_perform::Link::Direct,
     };
-    let played = orch_perform::perform::<_, orch_perform::MidiRecording>(
-        &setup,
-        events.into_iter(),
-        notes,
-        None,
-        &mut orch_seq::VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    let played = orch_perform::Performer::new(&setup, events.into_iter(), notes)
+        .run()
+        .unwrap();
     assert_eq!(
         orch_roll::build::roll(&song, &played, (36, 96), 1.0, "x"),
         Err(orch_roll::build::BuildError::NotTheSong)
@@ -389,16 +376,11 @@ fn a_performance_that_jumped_is_refused() {
         tempo: orch_perform::Tempo::NORMAL,
         link: orch_perform::Link::Direct,
     };
-    let played = orch_perform::perform::<_, orch_perform::MidiRecording>(
-        &setup,
-        orch_perform::song_events(&song),
-        song.notes(),
-        None,
-        &mut orch_seq::VirtualClock::new(),
-        Some(&control),
-        None,
-    )
-    .unwrap();
+    let played =
+        orch_perform::Performer::new(&setup, orch_perform::song_events(&song), song.notes())
+            .control(&control)
+            .run()
+            .unwrap();
     assert!(played.jumps > 0);
     assert_eq!(
         orch_roll::build::roll(&song, &played, (36, 96), 1.0, "x"),

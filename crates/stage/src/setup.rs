@@ -2,13 +2,10 @@
 //! front end may ask for, and a performance on the virtual clock (as fast as the machine
 //! goes: a ten-minute piece in a few tens of ms).
 
-use orch_io::Output;
 use orch_perform::follow::FACTOR_RANGE;
-use orch_perform::{
-    perform, song_events, Control, Link, MidiRecording, Played, Setup, Spread, Tempo,
-};
+use orch_perform::{song_events, Control, Link, Performer, Played, Setup, Spread, Tempo};
 use orch_robot::Robot;
-use orch_seq::{Song, VirtualClock};
+use orch_seq::Song;
 
 use crate::session::{lane_events, Ended, Lane};
 use crate::StageError;
@@ -39,15 +36,7 @@ pub fn setup(robot: &Robot, compensation: bool, tempo: Tempo) -> Setup {
 
 /// Plays `song` on the virtual robot alone, on the virtual clock.
 pub fn play_fast(song: &Song, setup: &Setup) -> Result<Played, StageError> {
-    Ok(perform::<_, MidiRecording>(
-        setup,
-        song_events(song),
-        song.notes(),
-        None,
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )?)
+    Ok(Performer::new(setup, song_events(song), song.notes()).run()?)
 }
 
 /// Plays `song` on every lane's virtual robot in turn, on the virtual clock, from `from_us`
@@ -73,15 +62,11 @@ pub fn play_lanes_fast(
                 c.jump_to(t);
                 c
             });
-            let played = perform::<_, Output>(
-                &l.setup,
-                events.into_iter(),
-                notes,
-                None,
-                &mut VirtualClock::new(),
-                control.as_deref(),
-                None,
-            )?;
+            let mut performer = Performer::new(&l.setup, events.into_iter(), notes);
+            if let Some(c) = control.as_deref() {
+                performer = performer.control(c);
+            }
+            let played = performer.run()?;
             Ok(Ended {
                 spec: l.spec,
                 played,

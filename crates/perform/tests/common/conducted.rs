@@ -9,8 +9,8 @@ use std::sync::Arc;
 
 use orch_perform::conduct::encode_osc;
 use orch_perform::{
-    perform, song_events, thesis_config, Action, Control, Cue, Follow, Follower, Link, MidiClock,
-    MidiRecording, OscCues, Outcome, ScoreBeats, Setup, Tempo, Timed,
+    song_events, thesis_config, Action, Control, Cue, Follow, Follower, Link, MidiClock, OscCues,
+    Outcome, Performer, ScoreBeats, Setup, Tempo, Timed,
 };
 use orch_seq::{Bell, Clock, Lateness, Song, VirtualClock};
 
@@ -292,16 +292,12 @@ pub fn conduct(song: &Song, input: &[(u64, Vec<u8>)], via: Via, follow: Follow) 
         },
     );
     let mut live = |_: &orch_perform::Live| {};
-    let played = perform::<_, MidiRecording>(
-        &setup(),
-        song_events(song),
-        song.notes(),
-        None,
-        &mut clock,
-        Some(&control),
-        Some(&mut live),
-    )
-    .unwrap();
+    let played = Performer::new(&setup(), song_events(song), song.notes())
+        .clock(&mut clock)
+        .control(&control)
+        .live(&mut live)
+        .run()
+        .unwrap();
     drop(clock);
     let r = played.report(None);
     assert!(r.adds_up(), "{r:?}");

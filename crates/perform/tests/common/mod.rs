@@ -10,7 +10,8 @@ use std::sync::Arc;
 
 use orch_core::Config;
 use orch_perform::{
-    perform, thesis_config, Control, Link, MidiOut, MidiRecording, Played, ScoreEvent, Setup, Tempo,
+    thesis_config, Control, Link, MidiOut, MidiRecording, Performer, Played, ScoreEvent, Setup,
+    Tempo,
 };
 use orch_seq::{Song, VirtualClock};
 
@@ -53,15 +54,11 @@ pub fn render_to<M: MidiOut>(
     notes: usize,
     midi: Option<&mut M>,
 ) -> Played {
-    perform(
-        setup,
-        events,
-        notes,
-        midi,
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
+    let performer = Performer::new(setup, events, notes);
+    match midi {
+        Some(out) => performer.midi(out).run(),
+        None => performer.run(),
+    }
     .unwrap()
 }
 
