@@ -10,7 +10,7 @@ use std::process::{Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use orch_perform::{song_events, Link, MidiRecording, Performer, Setup, Tempo};
+use orch_perform::{song_events, Link, MidiRecording, Performer, Tempo};
 use orch_seq::Song;
 use serde_json::Value;
 
@@ -84,10 +84,7 @@ fn temp(name: &str) -> PathBuf {
 fn planned(file: &[u8], link: Link) -> Vec<u8> {
     let song = Song::parse(file).unwrap();
     let robot = orch_stage::load_robot(None).unwrap();
-    let setup = Setup {
-        link,
-        ..orch_stage::setup::setup(&robot, true, Tempo::NORMAL)
-    };
+    let setup = orch_stage::setup::setup(&robot, true, Tempo::NORMAL).with_link(link);
     let mut rec = MidiRecording::default();
     Performer::new(&setup, song_events(&song), song.notes())
         .midi(&mut rec)

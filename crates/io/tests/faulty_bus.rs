@@ -11,7 +11,7 @@ use std::time::Duration;
 use embedded_hal::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
 use orch_core::Instant;
 use orch_io::{BoardStats, BoardsOut, TimedBus};
-use orch_perform::{song_events, thesis_config, Link, Performer, Setup, Tempo};
+use orch_perform::{song_events, thesis_config, Performer, Setup};
 use orch_seq::Song;
 use orch_sim::{BusError, Keep, SimConfig, VirtualRobot};
 
@@ -164,16 +164,7 @@ struct Run {
 
 fn run(faults: Vec<Fault>) -> Run {
     let song = song();
-    let setup = Setup {
-        config: thesis_config(),
-        sim: SimConfig {
-            keep: Keep::Presses,
-            ..SimConfig::thesis()
-        },
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    };
+    let setup = Setup::thesis().with_keep(Keep::Presses);
     let mut out = BoardsOut::new(setup.config, FaultyBus::new(faults)).unwrap();
     let played = Performer::new(&setup, song_events(&song), song.notes())
         .midi(&mut out)
@@ -341,13 +332,7 @@ impl<M: orch_perform::MidiOut> orch_perform::MidiOut for PanicAt<M> {
 #[test]
 fn a_panic_in_the_middle_of_a_piece_lets_go_of_every_finger_as_it_unwinds() {
     let song = song();
-    let setup = Setup {
-        config: thesis_config(),
-        sim: SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    };
+    let setup = Setup::thesis();
     let bus = FaultyBus::new(vec![]);
     let at_drop = Arc::clone(&bus.at_drop);
     let out = BoardsOut::new(setup.config, bus).unwrap();
@@ -381,13 +366,7 @@ fn stopping_during_a_chord_lets_every_finger_up_before_the_performance_returns()
             });
         }
     }
-    let setup = Setup {
-        config: thesis_config(),
-        sim: SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    };
+    let setup = Setup::thesis();
     let mut out = BoardsOut::new(setup.config, FaultyBus::new(vec![])).unwrap();
     let control = Control::new();
     let stopper = std::sync::Arc::clone(&control);

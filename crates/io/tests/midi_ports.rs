@@ -13,9 +13,7 @@ use std::time::{Duration, Instant};
 
 use orch_io::midi::all_notes_off;
 use orch_io::{RawMidiOut, SerialOut, UdpOut};
-use orch_perform::{
-    song_events, thesis_config, Link, MidiOut, MidiRecording, Performer, Setup, Tempo,
-};
+use orch_perform::{song_events, Link, MidiOut, MidiRecording, Performer, Setup};
 use orch_seq::Song;
 
 fn song() -> Song {
@@ -24,13 +22,7 @@ fn song() -> Song {
 }
 
 fn setup(link: Link) -> Setup {
-    Setup {
-        config: thesis_config(),
-        sim: orch_sim::SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link,
-    }
+    Setup::thesis().with_link(link)
 }
 
 /// What the performer sends for the piece, as (time, bytes) sends.

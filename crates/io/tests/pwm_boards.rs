@@ -9,7 +9,7 @@ use std::time::Duration;
 use embedded_hal::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
 use orch_core::{BoardKind, Config, Dynamics, Instant};
 use orch_io::{BoardsOut, TimedBus};
-use orch_perform::{thesis_config, Link, Performer, ScoreEvent, Setup, Tempo};
+use orch_perform::{thesis_config, Performer, ScoreEvent, Setup};
 use orch_seq::WireBytes;
 use orch_sim::{BusClock, BusError, Keep, SimConfig, VirtualRobot};
 
@@ -118,13 +118,7 @@ fn song() -> (Vec<ScoreEvent>, usize) {
 
 fn play(vanish: Option<(u8, u64, u64)>) -> (BoardsOut<SimBus>, orch_perform::Played) {
     let config = config();
-    let setup = Setup {
-        config,
-        sim: sim(&config, Keep::Presses),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    };
+    let setup = Setup::new(config, sim(&config, Keep::Presses));
     let bus = SimBus {
         robot: VirtualRobot::new(sim(&config, Keep::Everything)),
         now_us: 0,

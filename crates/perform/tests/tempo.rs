@@ -4,9 +4,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use orch_perform::{
-    song_events, thesis_config, Control, Link, Live, MidiRecording, Performer, Setup, Tempo,
-};
+use orch_perform::{song_events, Control, Link, Live, MidiRecording, Performer, Setup, Tempo};
 use orch_seq::Song;
 
 mod common;
@@ -16,13 +14,7 @@ use common::{note_ons, note_ons_at, ActAt};
 fn a_tempo_change_mid_piece_plays_every_note_once_in_order() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/midi");
     let song = Song::parse(&std::fs::read(dir.join("bach-invention-01.mid")).unwrap()).unwrap();
-    let setup = Setup {
-        config: thesis_config(),
-        sim: orch_sim::SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Din,
-    };
+    let setup = Setup::thesis().with_link(Link::Din);
     let control: Arc<Control> = Control::new();
     let mut changed = false;
     let mut last_song_us = 0u64;
@@ -88,13 +80,7 @@ fn a_tempo_change_mid_piece_plays_every_note_once_in_order() {
 fn pause_and_resume(link: Link, midi: bool) {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/midi");
     let song = Song::parse(&std::fs::read(dir.join("bach-invention-01.mid")).unwrap()).unwrap();
-    let setup = Setup {
-        config: thesis_config(),
-        sim: orch_sim::SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link,
-    };
+    let setup = Setup::thesis().with_link(link);
     let control: Arc<Control> = Control::new();
     let mut paused_views = 0;
     let mut asked = false;
@@ -191,13 +177,7 @@ fn a_change_after_an_early_press_counts_the_note_it_made_late() {
     smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
     smf.extend_from_slice(&trk);
     let song = Song::parse(&smf).unwrap();
-    let setup = Setup {
-        config: thesis_config(),
-        sim: orch_sim::SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    };
+    let setup = Setup::thesis();
     let lead = setup.rules().press_lead_us[24 + 1];
     let control: Arc<Control> = Control::new();
     // The second note's press goes out `lead` before 1 s; three times as fast from then.

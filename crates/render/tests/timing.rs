@@ -5,7 +5,7 @@
 
 mod support;
 
-use orch_perform::{song_events, Link, Performer, Played, Setup, Tempo};
+use orch_perform::{song_events, Performer, Played, Setup};
 use orch_render::{events, onset, synth, Settings};
 use orch_seq::Song;
 
@@ -43,16 +43,13 @@ fn smf(notes: &[(u32, u8, u8, u32)]) -> Song {
 }
 
 fn play(song: &Song, config: orch_core::Config<{ orch_perform::MAX_BOARDS }>) -> Played {
-    let setup = Setup {
+    let setup = Setup::new(
         config,
-        sim: orch_sim::SimConfig {
+        orch_sim::SimConfig {
             keep: orch_sim::Keep::Everything,
             ..orch_sim::SimConfig::thesis()
         },
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    };
+    );
     Performer::new(&setup, song_events(song), song.notes())
         .run()
         .unwrap()

@@ -46,14 +46,11 @@ pub fn out_specs(texts: &[String]) -> Result<Vec<OutSpec>, LiveError> {
 pub fn open_lanes(specs: Vec<OutSpec>, setup: &Setup) -> Result<Vec<Lane>, LiveError> {
     let mut lanes = Vec::new();
     for spec in specs {
-        let setup = Setup {
-            link: if spec.is_din() {
-                Link::Din
-            } else {
-                Link::Direct
-            },
-            ..setup.clone()
-        };
+        let setup = setup.clone().with_link(if spec.is_din() {
+            Link::Din
+        } else {
+            Link::Direct
+        });
         let out = Output::open(
             &spec.target,
             &setup.config,

@@ -3,7 +3,7 @@
 //! goes: a ten-minute piece in a few tens of ms).
 
 use orch_perform::follow::FACTOR_RANGE;
-use orch_perform::{song_events, Control, Link, Performer, Played, Setup, Spread, Tempo};
+use orch_perform::{song_events, Control, Performer, Played, Setup, Spread, Tempo};
 use orch_robot::Robot;
 use orch_seq::Song;
 
@@ -21,17 +21,9 @@ pub fn tempo(factor: f64) -> Result<Tempo, StageError> {
 
 /// How `robot` plays, with or without compensation, at `tempo`, on this host.
 pub fn setup(robot: &Robot, compensation: bool, tempo: Tempo) -> Setup {
-    Setup {
-        config: robot.config,
-        // The report needs the presses and the figures, not every write and edge.
-        sim: orch_sim::SimConfig {
-            keep: orch_sim::Keep::Presses,
-            ..robot.sim_config()
-        },
-        compensation,
-        tempo,
-        link: Link::Direct,
-    }
+    Setup::for_robot(robot)
+        .with_compensation(compensation)
+        .with_tempo(tempo)
 }
 
 /// Plays `song` on the virtual robot alone, on the virtual clock.
@@ -82,9 +74,6 @@ pub fn uncompensated(song: &Song, setup: &Setup) -> Result<Option<Spread>, Stage
     if !setup.compensation {
         return Ok(None);
     }
-    let plain = Setup {
-        compensation: false,
-        ..setup.clone()
-    };
+    let plain = setup.clone().with_compensation(false);
     Ok(Some(Spread::of_onsets(&play_fast(song, &plain)?.records)))
 }

@@ -29,9 +29,7 @@ use std::sync::Arc;
 use orch_calibrate::fit::db_of_loudness;
 use orch_calibrate::synthetic::{HiddenKey, Rng, Solenoid};
 use orch_calibrate::{Recording, Score};
-use orch_perform::{
-    song_events, Link, MidiRecording, Outcome, Performer, Played, ScoreEvent, Setup, Tempo,
-};
+use orch_perform::{song_events, MidiRecording, Outcome, Performer, Played, ScoreEvent, Setup};
 use orch_render::{events, soundfont, synth, Action, KeyEvent, Settings, SoundFont};
 use orch_robot::Robot;
 use orch_seq::{Song, WireBytes};
@@ -159,16 +157,9 @@ pub fn hidden(input: &str, softest: (f64, f64), seed: u64) -> Hidden {
 
 /// How `robot` plays on the virtual clock, every sound kept.
 pub fn setup(robot: &Robot, compensation: bool) -> Setup {
-    Setup {
-        config: robot.config,
-        sim: orch_sim::SimConfig {
-            keep: orch_sim::Keep::Everything,
-            ..robot.sim_config()
-        },
-        compensation,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    }
+    Setup::for_robot(robot)
+        .with_keep(orch_sim::Keep::Everything)
+        .with_compensation(compensation)
 }
 
 /// Plays `song` as `setup` says, on the virtual clock.

@@ -9,8 +9,8 @@ use std::sync::Arc;
 
 use orch_perform::conduct::encode_osc;
 use orch_perform::{
-    song_events, thesis_config, Action, Control, Cue, Follow, Follower, Link, MidiClock, OscCues,
-    Outcome, Performer, ScoreBeats, Setup, Tempo, Timed,
+    song_events, Action, Control, Cue, Follow, Follower, MidiClock, OscCues, Outcome, Performer,
+    ScoreBeats, Setup, Timed,
 };
 use orch_seq::{Bell, Clock, Lateness, Song, VirtualClock};
 
@@ -107,13 +107,7 @@ impl<F: FnMut(u64, Option<usize>, &Control) -> Option<u64>> Clock for Conducted<
 
 /// The thesis's robot, compensation on, as written.
 pub fn setup() -> Setup {
-    Setup {
-        config: thesis_config(),
-        sim: orch_sim::SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    }
+    Setup::thesis()
 }
 
 /// How the beats reach the follower.

@@ -11,7 +11,6 @@ use std::sync::Arc;
 use orch_core::Config;
 use orch_perform::{
     thesis_config, Control, Link, MidiOut, MidiRecording, Performer, Played, ScoreEvent, Setup,
-    Tempo,
 };
 use orch_seq::{Song, VirtualClock};
 
@@ -30,16 +29,14 @@ pub fn corpus_song(file: &str) -> Song {
 /// The thesis's robot with `config`'s settings on a 400 kHz bus, compensation on, at the
 /// written tempo, over `link`.
 pub fn setup_with(config: Config<16>, link: Link) -> Setup {
-    Setup {
+    Setup::new(
         config,
-        sim: orch_sim::SimConfig {
+        orch_sim::SimConfig {
             clock: orch_sim::BusClock::FAST,
             ..orch_sim::SimConfig::thesis()
         },
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link,
-    }
+    )
+    .with_link(link)
 }
 
 /// [`setup_with`] the thesis's configuration.
@@ -160,14 +157,12 @@ pub fn pwm_setup(mechanics: orch_sim::MechanicsConfig, compensation: bool) -> Se
         kinds: vec![orch_core::BoardKind::Pwm; 4],
         ..orch_sim::SimConfig::thesis().with_layout(&config.layout)
     };
-    Setup {
+    Setup::new(
         config,
-        sim: orch_sim::SimConfig {
+        orch_sim::SimConfig {
             boards: sim.boards[..4].to_vec(),
             ..sim
         },
-        compensation,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    }
+    )
+    .with_compensation(compensation)
 }

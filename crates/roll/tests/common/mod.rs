@@ -1,7 +1,7 @@
 //! Two small hand-made songs, performed on the virtual robot and drawn.
 #![allow(dead_code)]
 
-use orch_perform::{song_events, Link, Performer, Played, Setup, Tempo};
+use orch_perform::{song_events, Performer, Played, Setup, Tempo};
 use orch_robot::Robot;
 use orch_roll::Roll;
 use orch_seq::Song;
@@ -102,16 +102,9 @@ pub fn play(song: &Song, robot: &Robot) -> Played {
 
 /// [`play`] at `tempo`.
 pub fn play_at(song: &Song, robot: &Robot, tempo: Tempo) -> Played {
-    let setup = Setup {
-        config: robot.config,
-        sim: orch_sim::SimConfig {
-            keep: orch_sim::Keep::Everything,
-            ..robot.sim_config()
-        },
-        compensation: true,
-        tempo,
-        link: Link::Direct,
-    };
+    let setup = Setup::for_robot(robot)
+        .with_keep(orch_sim::Keep::Everything)
+        .with_tempo(tempo);
     Performer::new(&setup, song_events(song), song.notes())
         .run()
         .expect("a performance")
