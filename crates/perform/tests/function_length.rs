@@ -55,7 +55,7 @@ fn braces(line: &str) -> impl Iterator<Item = i64> + '_ {
 
 /// Whether `line` starts a function.
 fn starts_fn(line: &str) -> Option<String> {
-    let mut words = line.trim_start().split_whitespace();
+    let mut words = line.split_whitespace();
     loop {
         let w = words.next()?;
         if w.starts_with("pub") || ["const", "async", "unsafe", "extern", "default"].contains(&w) {
