@@ -10,8 +10,8 @@ use std::time::{Duration, Instant};
 use orch_baton::synth::{Script, Video};
 use orch_baton::Baton;
 use orch_perform::{
-    perform, song_events, Action, Control, Cue, Follow, Follower, MidiRecording, Outcome,
-    ScoreBeats, Tempo, Timed,
+    song_events, Action, Control, Cue, Follow, Follower, Outcome, Performer, ScoreBeats, Tempo,
+    Timed,
 };
 use orch_seq::Song;
 
@@ -105,16 +105,12 @@ fn conduct_with_video(video: &Video, follow: Follow) -> Followed {
         follower.due()
     });
     let mut live = |_: &orch_perform::Live| {};
-    let played = perform::<_, MidiRecording>(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        None,
-        &mut clock,
-        Some(&control),
-        Some(&mut live),
-    )
-    .unwrap();
+    let played = Performer::new(&setup, song_events(&song), song.notes())
+        .clock(&mut clock)
+        .control(&control)
+        .live(&mut live)
+        .run()
+        .unwrap();
     drop(clock);
     let r = played.report(None);
     assert!(r.adds_up(), "{r:?}");

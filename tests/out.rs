@@ -10,8 +10,8 @@ use std::process::{Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use orch_perform::{perform, song_events, Link, MidiRecording, Setup, Tempo};
-use orch_seq::{Song, VirtualClock};
+use orch_perform::{song_events, Link, MidiRecording, Performer, Tempo};
+use orch_seq::Song;
 use serde_json::Value;
 
 /// A one-track SMF, 480 ticks a quarter at 120 bpm (a tick is 1/960 s): each entry is
@@ -84,21 +84,12 @@ fn temp(name: &str) -> PathBuf {
 fn planned(file: &[u8], link: Link) -> Vec<u8> {
     let song = Song::parse(file).unwrap();
     let robot = orch_stage::load_robot(None).unwrap();
-    let setup = Setup {
-        link,
-        ..orch_stage::setup::setup(&robot, true, Tempo::NORMAL)
-    };
+    let setup = orch_stage::setup::setup(&robot, true, Tempo::NORMAL).with_link(link);
     let mut rec = MidiRecording::default();
-    perform(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        Some(&mut rec),
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    Performer::new(&setup, song_events(&song), song.notes())
+        .midi(&mut rec)
+        .run()
+        .unwrap();
     rec.sent.into_iter().flat_map(|s| s.1).collect()
 }
 

@@ -161,123 +161,114 @@ impl Tracker {
 
     /// One frame at `t_ms` with its blobs (from [`crate::Detector`]).
     pub fn update(&mut self, t_ms: f64, blobs: &[Blob]) -> Seen {
-        let p = self.params;
         let candidates: Vec<usize> = (0..blobs.len())
             .filter(|&i| self.led_like(&blobs[i]))
             .collect();
         let mut new_track = false;
-        let mut chosen: Option<usize> = None;
-
-        if let Some(tr) = self.track {
-            let dt = t_ms - tr.t_ms;
-            let coast = dt.min(p.coast_ms);
-            let (px, py) = (tr.x + tr.vx * coast, tr.y + tr.vy * coast);
-            let gate = (p.gate_px + p.max_speed * dt + p.gate_growth_px * tr.missed as f64)
-                .min(p.max_gate_px);
-            let mut best = f64::INFINITY;
-            for &i in &candidates {
-                let d = ((blobs[i].x - px).powi(2) + (blobs[i].y - py).powi(2)).sqrt();
-                // Within the gate; a static spot only close to where the track is.
-                let ok = d <= gate && (d <= p.gate_px || !self.is_static(&blobs[i]));
-                if ok && d < best {
-                    best = d;
-                    chosen = Some(i);
-                }
-            }
-            if chosen.is_none() && t_ms - tr.t_ms > p.lost_ms {
-                self.track = None;
-            }
-        }
-
+        let mut chosen = self.gated(t_ms, blobs, &candidates);
         if self.track.is_none() {
-            chosen = candidates
-                .iter()
-                .copied()
-                .filter(|&i| !self.is_static(&blobs[i]))
-                .max_by(|&a, &b| {
-                    (blobs[a].peak, blobs[a].weight)
-                        .partial_cmp(&(blobs[b].peak, blobs[b].weight))
-                        .unwrap_or(std::cmp::Ordering::Equal)
-                })
-                .or_else(|| candidates.first().copied());
-            if let Some(i) = chosen {
-                new_track = true;
-                self.track = Some(Track {
-                    x: blobs[i].x,
-                    y: blobs[i].y,
-                    vx: 0.0,
-                    vy: 0.0,
-                    t_ms,
-                    missed: 0,
-                    still_since: Some(t_ms),
-                });
-                self.mover = None;
-            }
-        } else if let (Some(i), Some(tr)) = (chosen, self.track.as_mut()) {
-            let dt = (t_ms - tr.t_ms).max(1e-3);
-            let (vx, vy) = ((blobs[i].x - tr.x) / dt, (blobs[i].y - tr.y) / dt);
-            let moved = ((blobs[i].x - tr.x).powi(2) + (blobs[i].y - tr.y).powi(2)).sqrt();
-            let frames = 1.0 + tr.missed as f64;
-            if moved / frames >= p.still_px {
-                tr.still_since = None;
-            } else if tr.still_since.is_none() {
-                tr.still_since = Some(t_ms);
-            }
-            *tr = Track {
-                x: blobs[i].x,
-                y: blobs[i].y,
-                vx,
-                vy,
-                t_ms,
-                missed: 0,
-                still_since: tr.still_since,
-            };
+            chosen = self.start(t_ms, blobs, &candidates);
+            new_track = chosen.is_some();
+        } else if let Some(i) = chosen {
+            self.follow(t_ms, &blobs[i]);
         } else if let Some(tr) = self.track.as_mut() {
             tr.missed += 1;
         }
+        self.watch_others(t_ms, blobs, &candidates, chosen);
+        if let Some(seen) = self.switch(t_ms) {
+            return seen;
+        }
+        Seen {
+            at: chosen.map(|i| (blobs[i].x, blobs[i].y)),
+            new_track,
+        }
+    }
 
-        // The others: remember static spots, follow the fastest mover.
+    /// The candidate that continues the running track: the nearest within its gate. A track
+    /// with none for too long is dropped.
+    fn gated(&mut self, t_ms: f64, blobs: &[Blob], candidates: &[usize]) -> Option<usize> {
+        let p = self.params;
+        let tr = self.track?;
+        let dt = t_ms - tr.t_ms;
+        let coast = dt.min(p.coast_ms);
+        let (px, py) = (tr.x + tr.vx * coast, tr.y + tr.vy * coast);
+        let gate = (p.gate_px + p.max_speed * dt + p.gate_growth_px * f64::from(tr.missed))
+            .min(p.max_gate_px);
+        let mut best = f64::INFINITY;
+        let mut chosen = None;
+        for &i in candidates {
+            let d = ((blobs[i].x - px).powi(2) + (blobs[i].y - py).powi(2)).sqrt();
+            // Within the gate; a static spot only close to where the track is.
+            let ok = d <= gate && (d <= p.gate_px || !self.is_static(&blobs[i]));
+            if ok && d < best {
+                best = d;
+                chosen = Some(i);
+            }
+        }
+        if chosen.is_none() && t_ms - tr.t_ms > p.lost_ms {
+            self.track = None;
+        }
+        chosen
+    }
+
+    /// Starts a track on the brightest non-static candidate (a static one only when there is
+    /// nothing else).
+    fn start(&mut self, t_ms: f64, blobs: &[Blob], candidates: &[usize]) -> Option<usize> {
+        let i = candidates
+            .iter()
+            .copied()
+            .filter(|&i| !self.is_static(&blobs[i]))
+            .max_by(|&a, &b| {
+                (blobs[a].peak, blobs[a].weight)
+                    .partial_cmp(&(blobs[b].peak, blobs[b].weight))
+                    .unwrap_or(std::cmp::Ordering::Equal)
+            })
+            .or_else(|| candidates.first().copied())?;
+        self.track = Some(Track::at(blobs[i].x, blobs[i].y, t_ms, Some(t_ms)));
+        self.mover = None;
+        Some(i)
+    }
+
+    /// The running track goes on to `b`.
+    fn follow(&mut self, t_ms: f64, b: &Blob) {
+        let still_px = self.params.still_px;
+        let Some(tr) = self.track.as_mut() else {
+            return;
+        };
+        let dt = (t_ms - tr.t_ms).max(1e-3);
+        let (vx, vy) = ((b.x - tr.x) / dt, (b.y - tr.y) / dt);
+        let moved = ((b.x - tr.x).powi(2) + (b.y - tr.y).powi(2)).sqrt();
+        let frames = 1.0 + f64::from(tr.missed);
+        if moved / frames >= still_px {
+            tr.still_since = None;
+        } else if tr.still_since.is_none() {
+            tr.still_since = Some(t_ms);
+        }
+        *tr = Track {
+            vx,
+            vy,
+            ..Track::at(b.x, b.y, t_ms, tr.still_since)
+        };
+    }
+
+    /// The candidates other than the track's: remember static spots, follow the fastest
+    /// mover.
+    fn watch_others(
+        &mut self,
+        t_ms: f64,
+        blobs: &[Blob],
+        candidates: &[usize],
+        chosen: Option<usize>,
+    ) {
         let mut mover_next: Option<Mover> = None;
-        for &i in &candidates {
-            if Some(i) == chosen {
-                continue;
-            }
+        for &i in candidates.iter().filter(|&&i| Some(i) != chosen) {
             let b = &blobs[i];
-            let r2 = p.static_px * p.static_px;
-            if let Some(s) = self
-                .spots
-                .iter_mut()
-                .find(|s| (s.x - b.x).powi(2) + (s.y - b.y).powi(2) <= r2)
-            {
-                s.hits += 1;
-                s.last_ms = t_ms;
-            } else {
-                if self.spots.len() >= 64 {
-                    let oldest = (0..self.spots.len())
-                        .min_by(|&a, &c| self.spots[a].last_ms.total_cmp(&self.spots[c].last_ms))
-                        .unwrap_or(0);
-                    self.spots.swap_remove(oldest);
+            self.remember(b, t_ms);
+            if let Some(m) = self.moved_on(b) {
+                if mover_next.is_none_or(|n| m.frames > n.frames) {
+                    mover_next = Some(m);
                 }
-                self.spots.push(Spot {
-                    x: b.x,
-                    y: b.y,
-                    hits: 1,
-                    last_ms: t_ms,
-                });
-            }
-            if let Some(m) = self.mover {
-                let d = ((b.x - m.x).powi(2) + (b.y - m.y).powi(2)).sqrt();
-                if d >= p.still_px && d <= p.max_gate_px / 2.0 {
-                    let frames = m.frames + 1;
-                    if mover_next.is_none_or(|n| frames > n.frames) {
-                        mover_next = Some(Mover {
-                            x: b.x,
-                            y: b.y,
-                            frames,
-                        });
-                    }
-                    continue;
-                }
+                continue;
             }
             if mover_next.is_none() && !self.is_static(b) {
                 mover_next = Some(Mover {
@@ -289,33 +280,76 @@ impl Tracker {
         }
         self.spots.retain(|s| t_ms - s.last_ms <= 2000.0);
         self.mover = mover_next;
+    }
 
-        // A track standing still while something else keeps moving: switch.
-        if let (Some(tr), Some(m)) = (self.track, self.mover) {
-            let still = tr
-                .still_since
-                .is_some_and(|s| t_ms - s >= p.switch_still_ms);
-            if still && m.frames >= p.switch_frames {
-                self.track = Some(Track {
-                    x: m.x,
-                    y: m.y,
-                    vx: 0.0,
-                    vy: 0.0,
-                    t_ms,
-                    missed: 0,
-                    still_since: None,
-                });
-                self.mover = None;
-                return Seen {
-                    at: Some((m.x, m.y)),
-                    new_track: true,
-                };
-            }
+    /// Counts a sighting of `b` at its spot (a new spot, the oldest forgotten past 64).
+    fn remember(&mut self, b: &Blob, t_ms: f64) {
+        let r2 = self.params.static_px * self.params.static_px;
+        if let Some(s) = self
+            .spots
+            .iter_mut()
+            .find(|s| (s.x - b.x).powi(2) + (s.y - b.y).powi(2) <= r2)
+        {
+            s.hits += 1;
+            s.last_ms = t_ms;
+            return;
         }
+        if self.spots.len() >= 64 {
+            let oldest = (0..self.spots.len())
+                .min_by(|&a, &c| self.spots[a].last_ms.total_cmp(&self.spots[c].last_ms))
+                .unwrap_or(0);
+            self.spots.swap_remove(oldest);
+        }
+        self.spots.push(Spot {
+            x: b.x,
+            y: b.y,
+            hits: 1,
+            last_ms: t_ms,
+        });
+    }
 
-        Seen {
-            at: chosen.map(|i| (blobs[i].x, blobs[i].y)),
-            new_track,
+    /// The mover gone on to `b`, if `b` is a move of it (not standing, not a leap).
+    fn moved_on(&self, b: &Blob) -> Option<Mover> {
+        let p = self.params;
+        let m = self.mover?;
+        let d = ((b.x - m.x).powi(2) + (b.y - m.y).powi(2)).sqrt();
+        (d >= p.still_px && d <= p.max_gate_px / 2.0).then_some(Mover {
+            x: b.x,
+            y: b.y,
+            frames: m.frames + 1,
+        })
+    }
+
+    /// A track standing still while something else keeps moving: the track moves to it.
+    fn switch(&mut self, t_ms: f64) -> Option<Seen> {
+        let p = self.params;
+        let (tr, m) = (self.track?, self.mover?);
+        let still = tr
+            .still_since
+            .is_some_and(|s| t_ms - s >= p.switch_still_ms);
+        if !(still && m.frames >= p.switch_frames) {
+            return None;
+        }
+        self.track = Some(Track::at(m.x, m.y, t_ms, None));
+        self.mover = None;
+        Some(Seen {
+            at: Some((m.x, m.y)),
+            new_track: true,
+        })
+    }
+}
+
+impl Track {
+    /// A track at rest at (`x`, `y`) at `t_ms`.
+    fn at(x: f64, y: f64, t_ms: f64, still_since: Option<f64>) -> Self {
+        Self {
+            x,
+            y,
+            vx: 0.0,
+            vy: 0.0,
+            t_ms,
+            missed: 0,
+            still_since,
         }
     }
 }

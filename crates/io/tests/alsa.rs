@@ -8,33 +8,19 @@ use std::path::{Path, PathBuf};
 use alsa::seq::{Addr, MidiEvent, PortCap, PortInfo, PortType};
 use orch_io::alsa_seq::{event_bytes, seq_events, AlsaIn, AlsaOut};
 use orch_io::{InEvent, InTarget, MidiIn};
-use orch_perform::{
-    perform, song_events, thesis_config, Link, MidiOut, MidiRecording, Setup, Tempo,
-};
-use orch_seq::{Song, VirtualClock};
+use orch_perform::{song_events, MidiOut, MidiRecording, Performer, Setup};
+use orch_seq::Song;
 
 /// The messages the performer sends for a piece, each whole (running status undone).
 fn messages() -> Vec<Vec<u8>> {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/midi");
     let song = Song::parse(&std::fs::read(dir.join("bach-invention-01.mid")).unwrap()).unwrap();
-    let setup = Setup {
-        config: thesis_config(),
-        sim: orch_sim::SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    };
+    let setup = Setup::thesis();
     let mut rec = MidiRecording::default();
-    perform(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        Some(&mut rec),
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    Performer::new(&setup, song_events(&song), song.notes())
+        .midi(&mut rec)
+        .run()
+        .unwrap();
     let mut status = 0;
     rec.sent
         .into_iter()

@@ -11,8 +11,8 @@ use std::time::Duration;
 use embedded_hal::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
 use orch_core::Instant;
 use orch_io::{BoardStats, BoardsOut, TimedBus};
-use orch_perform::{perform, song_events, thesis_config, Link, Setup, Tempo};
-use orch_seq::{Song, VirtualClock};
+use orch_perform::{song_events, thesis_config, Performer, Setup};
+use orch_seq::Song;
 use orch_sim::{BusError, Keep, SimConfig, VirtualRobot};
 
 /// A fault the bus injects.
@@ -164,27 +164,12 @@ struct Run {
 
 fn run(faults: Vec<Fault>) -> Run {
     let song = song();
-    let setup = Setup {
-        config: thesis_config(),
-        sim: SimConfig {
-            keep: Keep::Presses,
-            ..SimConfig::thesis()
-        },
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    };
+    let setup = Setup::thesis().with_keep(Keep::Presses);
     let mut out = BoardsOut::new(setup.config, FaultyBus::new(faults)).unwrap();
-    let played = perform(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        Some(&mut out),
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .expect("a bad bus never stops the performance");
+    let played = Performer::new(&setup, song_events(&song), song.notes())
+        .midi(&mut out)
+        .run()
+        .expect("a bad bus never stops the performance");
     let stats = out.boards().stats();
     let bus = out.boards().set().bus();
     let writes = bus
@@ -347,27 +332,15 @@ impl<M: orch_perform::MidiOut> orch_perform::MidiOut for PanicAt<M> {
 #[test]
 fn a_panic_in_the_middle_of_a_piece_lets_go_of_every_finger_as_it_unwinds() {
     let song = song();
-    let setup = Setup {
-        config: thesis_config(),
-        sim: SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    };
+    let setup = Setup::thesis();
     let bus = FaultyBus::new(vec![]);
     let at_drop = Arc::clone(&bus.at_drop);
     let out = BoardsOut::new(setup.config, bus).unwrap();
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         let mut out = PanicAt { inner: out, n: 301 };
-        let _ = perform(
-            &setup,
-            song_events(&song),
-            song.notes(),
-            Some(&mut out),
-            &mut VirtualClock::new(),
-            None,
-            None,
-        );
+        let _ = Performer::new(&setup, song_events(&song), song.notes())
+            .midi(&mut out)
+            .run();
     }));
     assert!(result.is_err());
     // (Without the release on drop, keys are down here: the test fails.)
@@ -393,13 +366,7 @@ fn stopping_during_a_chord_lets_every_finger_up_before_the_performance_returns()
             });
         }
     }
-    let setup = Setup {
-        config: thesis_config(),
-        sim: SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    };
+    let setup = Setup::thesis();
     let mut out = BoardsOut::new(setup.config, FaultyBus::new(vec![])).unwrap();
     let control = Control::new();
     let stopper = std::sync::Arc::clone(&control);
@@ -410,16 +377,12 @@ fn stopping_during_a_chord_lets_every_finger_up_before_the_performance_returns()
             stopper.stop();
         }
     };
-    let played = perform(
-        &setup,
-        ev.into_iter(),
-        4,
-        Some(&mut out),
-        &mut VirtualClock::new(),
-        Some(&control),
-        Some(&mut on_live),
-    )
-    .unwrap();
+    let played = Performer::new(&setup, ev.into_iter(), 4)
+        .control(&control)
+        .midi(&mut out)
+        .live(&mut on_live)
+        .run()
+        .unwrap();
     assert!(played.stopped);
     assert_eq!(
         down_before_stop, 4,

@@ -13,10 +13,8 @@ use std::time::{Duration, Instant};
 
 use orch_io::midi::all_notes_off;
 use orch_io::{RawMidiOut, SerialOut, UdpOut};
-use orch_perform::{
-    perform, song_events, thesis_config, Link, MidiOut, MidiRecording, Setup, Tempo,
-};
-use orch_seq::{Song, VirtualClock};
+use orch_perform::{song_events, Link, MidiOut, MidiRecording, Performer, Setup};
+use orch_seq::Song;
 
 fn song() -> Song {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/midi");
@@ -24,45 +22,27 @@ fn song() -> Song {
 }
 
 fn setup(link: Link) -> Setup {
-    Setup {
-        config: thesis_config(),
-        sim: orch_sim::SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link,
-    }
+    Setup::thesis().with_link(link)
 }
 
 /// What the performer sends for the piece, as (time, bytes) sends.
 fn planned(link: Link) -> Vec<(u64, Vec<u8>)> {
     let song = song();
     let mut rec = MidiRecording::default();
-    perform(
-        &setup(link),
-        song_events(&song),
-        song.notes(),
-        Some(&mut rec),
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    Performer::new(&setup(link), song_events(&song), song.notes())
+        .midi(&mut rec)
+        .run()
+        .unwrap();
     rec.sent
 }
 
 /// Plays the piece into `out` on the virtual clock.
 fn play<M: MidiOut>(out: &mut M, link: Link) {
     let song = song();
-    let played = perform(
-        &setup(link),
-        song_events(&song),
-        song.notes(),
-        Some(out),
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    let played = Performer::new(&setup(link), song_events(&song), song.notes())
+        .midi(out)
+        .run()
+        .unwrap();
     assert!(played.report(None).adds_up());
 }
 

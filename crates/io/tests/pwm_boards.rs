@@ -9,8 +9,8 @@ use std::time::Duration;
 use embedded_hal::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
 use orch_core::{BoardKind, Config, Dynamics, Instant};
 use orch_io::{BoardsOut, TimedBus};
-use orch_perform::{perform, thesis_config, Link, ScoreEvent, Setup, Tempo};
-use orch_seq::{VirtualClock, WireBytes};
+use orch_perform::{thesis_config, Performer, ScoreEvent, Setup};
+use orch_seq::WireBytes;
 use orch_sim::{BusClock, BusError, Keep, SimConfig, VirtualRobot};
 
 /// The virtual robot's bus, one PWM board of which may vanish for a while.
@@ -118,13 +118,7 @@ fn song() -> (Vec<ScoreEvent>, usize) {
 
 fn play(vanish: Option<(u8, u64, u64)>) -> (BoardsOut<SimBus>, orch_perform::Played) {
     let config = config();
-    let setup = Setup {
-        config,
-        sim: sim(&config, Keep::Presses),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    };
+    let setup = Setup::new(config, sim(&config, Keep::Presses));
     let bus = SimBus {
         robot: VirtualRobot::new(sim(&config, Keep::Everything)),
         now_us: 0,
@@ -133,16 +127,10 @@ fn play(vanish: Option<(u8, u64, u64)>) -> (BoardsOut<SimBus>, orch_perform::Pla
     };
     let mut out = BoardsOut::with_kinds(config, &[BoardKind::Pwm; 4], 1526, bus).unwrap();
     let (events, notes) = song();
-    let played = perform(
-        &setup,
-        events.into_iter(),
-        notes,
-        Some(&mut out),
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .expect("plays");
+    let played = Performer::new(&setup, events.into_iter(), notes)
+        .midi(&mut out)
+        .run()
+        .expect("plays");
     (out, played)
 }
 

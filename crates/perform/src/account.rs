@@ -5,7 +5,7 @@
 use serde::Serialize;
 
 use crate::ledger::{NoteRecord, Outcome};
-use crate::performer::Played;
+use crate::played::Played;
 
 /// One note of the account (`orch play --notes`, `orch analyze --notes`), as one JSON object:
 ///

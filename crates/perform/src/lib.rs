@@ -26,8 +26,8 @@
 //!   the OS allows it, with a precise sleep, lateness measured per message sent.
 //!
 //! ```
-//! use orch_perform::{perform, song_events, Link, Setup, Tempo};
-//! use orch_seq::{Song, VirtualClock};
+//! use orch_perform::{song_events, Performer, Setup};
+//! use orch_seq::Song;
 //!
 //! // Middle C for a quarter note at 120 bpm.
 //! let smf = [
@@ -36,19 +36,39 @@
 //!     0x00, 0x90, 60, 100, 0x83, 0x60, 60, 0, 0x00, 0xFF, 0x2F, 0x00,
 //! ];
 //! let song = Song::parse(&smf).unwrap();
-//! let setup = Setup {
-//!     config: orch_perform::thesis_config(),
-//!     sim: orch_sim::SimConfig::thesis(),
-//!     compensation: true,
-//!     tempo: Tempo::NORMAL,
-//!     link: Link::Direct,
-//! };
-//! let played = perform::<_, orch_perform::MidiRecording>(
-//!     &setup, song_events(&song), song.notes(), None, &mut VirtualClock::new(), None, None,
-//! ).unwrap();
+//! // The thesis's robot, compensated, at the written tempo (`Setup::for_robot` reads yours).
+//! let setup = Setup::thesis();
+//! // On the virtual clock, as fast as the machine goes; `.clock(..)` paces it in real time,
+//! // `.midi(..)` sends the bytes to a robot, `.control(..)` and `.live(..)` steer and watch.
+//! let played = Performer::new(&setup, song_events(&song), song.notes()).run().unwrap();
 //! let report = played.report(None);
 //! assert_eq!(report.outcomes.on_time, 1);
 //! assert!(report.adds_up());
+//! ```
+//!
+//! The same to a MIDI output, steered from another thread and watched:
+//!
+//! ```
+//! use orch_perform::{Control, Live, MidiRecording, Performer, ScoreEvent, Setup};
+//!
+//! let setup = Setup::thesis();
+//! let events = [(0, [0x90, 60, 100]), (500_000, [0x80, 60, 0])].map(|(t, m)| ScoreEvent {
+//!     score_us: t,
+//!     bytes: orch_seq::WireBytes::new(&m),
+//! });
+//! let control = Control::new();
+//! let mut out = MidiRecording::default();
+//! let mut views = 0;
+//! let mut live = |_: &Live| views += 1;
+//! let played = Performer::new(&setup, events.into_iter(), 1)
+//!     .control(&control)
+//!     .midi(&mut out)
+//!     .live(&mut live)
+//!     .run()
+//!     .unwrap();
+//! assert!(played.report(None).adds_up());
+//! assert!(out.sent.iter().any(|(_, m)| m == &[0x90, 60, 100]));
+//! assert!(views > 0);
 //! ```
 //!
 //! ## Cargo features
@@ -59,37 +79,44 @@
 
 pub mod account;
 pub mod conduct;
+pub mod control;
 pub mod follow;
 pub mod ledger;
 pub mod link;
 pub mod meter;
 pub mod performer;
 pub mod plan;
+pub mod played;
 pub mod realtime;
 pub mod report;
 pub mod robot;
+mod run;
+pub mod setup;
 pub mod tempo;
+pub mod time;
 
 pub use account::NoteLine;
 pub use conduct::{
     Action, ConductError, Cue, MidiClock, OscCues, ScoreBeats, TapTempo, TempoSource, Timed,
 };
+pub use control::Control;
 pub use follow::{Follow, Follower};
 pub use ledger::{Ledger, NoteRecord, Outcome, ON_TIME_US};
 pub use link::{DinWire, Link, MidiOut, MidiRecording, RunningStatus};
 pub use meter::{Heard, Meter};
-pub use performer::{
-    perform, Control, Live, PerformError, Played, Setup, KEEP_ALIVE_US, VELOCITY_TOLERANCE,
-};
+pub use performer::{Live, PerformError, Performer, KEEP_ALIVE_US};
 pub use plan::{
     Jumped, KeyMap, NoteId, PlanRules, PlanStats, Planned, Planner, ScoreEvent, Skipped,
 };
+pub use played::{Played, VELOCITY_TOLERANCE};
 pub use report::{Bus, Dropped, Outcomes, Planning, Report, Spread, VelocityError};
 pub use robot::{
     sim_boards, Boards, Decided, HostInterpreter, LocalRobot, RobotError, SimBoards, MAX_BOARDS,
     MAX_KEYS,
 };
+pub use setup::Setup;
 pub use tempo::{Tempo, TimeMap};
+pub use time::{ScoreTime, WallTime};
 
 /// The score events of a song, in order.
 pub fn song_events(song: &orch_seq::Song) -> impl Iterator<Item = ScoreEvent> + Clone + '_ {

@@ -6,6 +6,8 @@
 //! as fast). A change of factor starts a new piece at the present, so score time stays
 //! continuous: nothing already played moves, nothing is skipped or repeated.
 
+use crate::time::{ScoreTime, WallTime};
+
 /// How fast to play: a factor above 0 and finite (1.0 as written).
 #[derive(Clone, Copy, Debug, PartialEq, PartialOrd)]
 pub struct Tempo(f64);
@@ -88,6 +90,17 @@ impl TimeMap {
         } else {
             s.round() as u64
         }
+    }
+
+    /// [`wall`](Self::wall), typed: the moment score time `score` plays (the clock's start if
+    /// that is before it).
+    pub fn wall_at(&self, score: ScoreTime) -> WallTime {
+        WallTime::from_signed(self.wall(score.as_micros()))
+    }
+
+    /// [`score`](Self::score), typed: the place in the song playing at `wall`.
+    pub fn score_at(&self, wall: WallTime) -> ScoreTime {
+        ScoreTime::from_micros(self.score(wall.signed()))
     }
 
     /// Paused at wall time `paused`, going on at `now`: the score time at `paused` plays at

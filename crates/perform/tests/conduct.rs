@@ -4,8 +4,8 @@
 
 use orch_perform::conduct::{encode_osc, OscArg};
 use orch_perform::{
-    perform, song_events, Action, Control, Cue, Follow, Follower, MidiClock, MidiRecording,
-    OscCues, ScoreBeats, Timed,
+    song_events, Action, Control, Cue, Follow, Follower, MidiClock, MidiRecording, OscCues,
+    Performer, ScoreBeats, Timed,
 };
 use orch_seq::Song;
 
@@ -74,16 +74,12 @@ fn follow_clock(song: &Song, clocks: &[u64], follow: Follow) -> (Vec<f64>, f64) 
         follower.due()
     });
     let mut live = |_: &orch_perform::Live| {};
-    let played = perform::<_, MidiRecording>(
-        &setup(),
-        song_events(song),
-        song.notes(),
-        None,
-        &mut clock,
-        Some(&control),
-        Some(&mut live),
-    )
-    .unwrap();
+    let played = Performer::new(&setup(), song_events(song), song.notes())
+        .clock(&mut clock)
+        .control(&control)
+        .live(&mut live)
+        .run()
+        .unwrap();
     let r = played.report(None);
     assert!(r.adds_up(), "{r:?}");
     assert_eq!(r.unmatched, 0);
@@ -148,16 +144,12 @@ fn osc_tempo_messages_are_parsed_and_applied() {
         },
     );
     let mut live = |_: &orch_perform::Live| {};
-    let played = perform::<_, MidiRecording>(
-        &setup(),
-        song_events(&song),
-        song.notes(),
-        None,
-        &mut clock,
-        Some(&control),
-        Some(&mut live),
-    )
-    .unwrap();
+    let played = Performer::new(&setup(), song_events(&song), song.notes())
+        .clock(&mut clock)
+        .control(&control)
+        .live(&mut live)
+        .run()
+        .unwrap();
     assert_eq!(applied, vec![0.75, 1.5]);
     let r = played.report(None);
     assert_eq!(r.strikes, 16);
@@ -209,16 +201,13 @@ fn song_position_from_a_midi_clock_lands_on_its_bar() {
     let mut views = Vec::new();
     let mut live = |l: &orch_perform::Live| views.push((l.song_us, l.paused));
     let mut out = MidiRecording::default();
-    let played = perform(
-        &setup(),
-        song_events(&song),
-        song.notes(),
-        Some(&mut out),
-        &mut clock,
-        Some(&control),
-        Some(&mut live),
-    )
-    .unwrap();
+    let played = Performer::new(&setup(), song_events(&song), song.notes())
+        .clock(&mut clock)
+        .control(&control)
+        .midi(&mut out)
+        .live(&mut live)
+        .run()
+        .unwrap();
     assert_eq!(jump_asked, Some(bar5));
     // Paused, the view shows where it will go on: bar 5.
     assert!(views.iter().any(|&(s, p)| p && s == bar5), "{views:?}");

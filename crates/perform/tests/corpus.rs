@@ -26,10 +26,7 @@ fn corpus() -> Vec<(String, Song)> {
 }
 
 fn setup(compensation: bool, link: Link) -> Setup {
-    Setup {
-        compensation,
-        ..common::setup(link)
-    }
+    common::setup(link).with_compensation(compensation)
 }
 
 fn play(setup: &Setup, song: &Song) -> Played {

@@ -3,8 +3,8 @@
 
 use std::sync::Arc;
 
-use orch_perform::{perform, song_events, Control, Link, Live, MidiRecording, Played};
-use orch_seq::{Song, VirtualClock};
+use orch_perform::{song_events, Control, Link, Live, MidiRecording, Performer, Played};
+use orch_seq::Song;
 
 mod common;
 use common::{corpus_song, note_ons_at, setup, ActAt};
@@ -42,16 +42,14 @@ fn jump(link: Link, midi: bool, at_us: u64, target_us: u64) -> Run {
         }
     };
     let mut out = MidiRecording::default();
-    let played = perform(
-        &setup(link),
-        song_events(&song),
-        song.notes(),
-        midi.then_some(&mut out),
-        &mut VirtualClock::new(),
-        Some(&control),
-        Some(&mut live),
-    )
-    .unwrap();
+    let setup = setup(link);
+    let mut performer = Performer::new(&setup, song_events(&song), song.notes())
+        .control(&control)
+        .live(&mut live);
+    if midi {
+        performer = performer.midi(&mut out);
+    }
+    let played = performer.run().unwrap();
     assert!(asked);
     Run { played, out, after }
 }
@@ -267,16 +265,10 @@ fn every_robot_sharing_a_control_takes_the_jump_and_the_tempo() {
     control.jump_to(song.bar_start_us(10).unwrap());
     control.set_tempo(orch_perform::Tempo::new(2.0).unwrap());
     for robot in 0..2 {
-        let played = perform::<_, MidiRecording>(
-            &setup(Link::Direct),
-            song_events(&song),
-            song.notes(),
-            None,
-            &mut VirtualClock::new(),
-            Some(&control),
-            None,
-        )
-        .unwrap();
+        let played = Performer::new(&setup(Link::Direct), song_events(&song), song.notes())
+            .control(&control)
+            .run()
+            .unwrap();
         let r = played.report(None);
         assert_eq!(r.jumps, 1, "robot {robot}");
         assert!(r.outcomes.skipped > 50, "robot {robot}: {r:?}");
@@ -303,16 +295,12 @@ fn a_jump_right_after_a_press_lets_that_strike_sound() {
         c.jump_to(10_000_000)
     });
     let mut live = |_: &Live| {};
-    let played = perform::<_, MidiRecording>(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        None,
-        &mut clock,
-        Some(&control),
-        Some(&mut live),
-    )
-    .unwrap();
+    let played = Performer::new(&setup, song_events(&song), song.notes())
+        .clock(&mut clock)
+        .control(&control)
+        .live(&mut live)
+        .run()
+        .unwrap();
     let r = played.report(None);
     assert!(r.adds_up(), "{r:?}");
     assert_eq!(r.jumps, 1);

@@ -4,9 +4,9 @@
 
 use orch_core::NoteEvent;
 use orch_perform::{
-    perform, sim_boards, song_events, DinWire, Link, LocalRobot, MidiRecording, ScoreEvent,
+    sim_boards, song_events, DinWire, Link, LocalRobot, MidiRecording, Performer, ScoreEvent,
 };
-use orch_seq::{VirtualClock, WireBytes};
+use orch_seq::WireBytes;
 
 mod common;
 
@@ -16,16 +16,10 @@ use common::{corpus_song as corpus, setup};
 fn a_din_line_carries_every_note_with_running_status_and_compensation_counts_its_time() {
     let song = corpus("bach-invention-01.mid");
     let mut out = MidiRecording::default();
-    let played = perform(
-        &setup(Link::Din),
-        song_events(&song),
-        song.notes(),
-        Some(&mut out),
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    let played = Performer::new(&setup(Link::Din), song_events(&song), song.notes())
+        .midi(&mut out)
+        .run()
+        .unwrap();
     let r = played.report(None);
     assert!(r.adds_up(), "{r:?}");
     assert_eq!(r.unmatched, 0);
@@ -78,16 +72,10 @@ fn a_ten_note_chord_on_din_spreads_over_about_six_ms_and_the_report_says_so() {
         });
     }
     let mut out = MidiRecording::default();
-    let played = perform(
-        &setup(Link::Din),
-        ev.into_iter(),
-        10,
-        Some(&mut out),
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    let played = Performer::new(&setup(Link::Din), ev.into_iter(), 10)
+        .midi(&mut out)
+        .run()
+        .unwrap();
     let r = played.report(None);
     assert!(r.adds_up());
     assert_eq!(r.strikes, 10);
@@ -109,16 +97,10 @@ fn a_ten_note_chord_on_din_spreads_over_about_six_ms_and_the_report_says_so() {
 fn din_stream(file: &str) -> Vec<(u64, u8)> {
     let song = corpus(file);
     let mut out = MidiRecording::default();
-    perform(
-        &setup(Link::Din),
-        song_events(&song),
-        song.notes(),
-        Some(&mut out),
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    Performer::new(&setup(Link::Din), song_events(&song), song.notes())
+        .midi(&mut out)
+        .run()
+        .unwrap();
     let mut wire = DinWire::default();
     let mut stream = Vec::new();
     for (t, bytes) in &out.sent {

@@ -6,9 +6,9 @@
 
 use orch_core::{Config, Overlap};
 use orch_perform::{
-    perform, thesis_config, Link, MidiRecording, Outcome, Planner, ScoreEvent, Setup, Tempo,
+    thesis_config, Link, MidiRecording, Outcome, Performer, Planner, ScoreEvent, Setup, Tempo,
 };
-use orch_seq::{VirtualClock, WireBytes};
+use orch_seq::WireBytes;
 use proptest::prelude::*;
 
 /// (time ms, channel, note, length ms) notes, made into score events in time order.
@@ -82,16 +82,11 @@ proptest! {
             }
         }
         let mut out = MidiRecording::default();
-        let played = perform(
-            &s,
-            events.into_iter(),
-            notes.len(),
-            din.then_some(&mut out),
-            &mut VirtualClock::new(),
-            None,
-            None,
-        )
-        .unwrap();
+        let mut performer = Performer::new(&s, events.into_iter(), notes.len());
+        if din {
+            performer = performer.midi(&mut out);
+        }
+        let played = performer.run().unwrap();
         let r = played.report(None);
         prop_assert!(r.adds_up(), "{:?}", r);
         prop_assert_eq!(r.notes, notes.len() as u64);

@@ -4,10 +4,8 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use orch_perform::{
-    perform, song_events, thesis_config, Control, Link, Live, MidiRecording, Setup, Tempo,
-};
-use orch_seq::{Song, VirtualClock};
+use orch_perform::{song_events, Control, Link, Live, MidiRecording, Performer, Setup, Tempo};
+use orch_seq::Song;
 
 mod common;
 use common::{note_ons, note_ons_at, ActAt};
@@ -16,13 +14,7 @@ use common::{note_ons, note_ons_at, ActAt};
 fn a_tempo_change_mid_piece_plays_every_note_once_in_order() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/midi");
     let song = Song::parse(&std::fs::read(dir.join("bach-invention-01.mid")).unwrap()).unwrap();
-    let setup = Setup {
-        config: thesis_config(),
-        sim: orch_sim::SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Din,
-    };
+    let setup = Setup::thesis().with_link(Link::Din);
     let control: Arc<Control> = Control::new();
     let mut changed = false;
     let mut last_song_us = 0u64;
@@ -42,16 +34,12 @@ fn a_tempo_change_mid_piece_plays_every_note_once_in_order() {
         }
     };
     let mut out = MidiRecording::default();
-    let played = perform(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        Some(&mut out),
-        &mut VirtualClock::new(),
-        Some(&control),
-        Some(&mut live),
-    )
-    .unwrap();
+    let played = Performer::new(&setup, song_events(&song), song.notes())
+        .control(&control)
+        .midi(&mut out)
+        .live(&mut live)
+        .run()
+        .unwrap();
     assert!(changed);
     let r = played.report(None);
     assert!(r.adds_up(), "{r:?}");
@@ -92,13 +80,7 @@ fn a_tempo_change_mid_piece_plays_every_note_once_in_order() {
 fn pause_and_resume(link: Link, midi: bool) {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/midi");
     let song = Song::parse(&std::fs::read(dir.join("bach-invention-01.mid")).unwrap()).unwrap();
-    let setup = Setup {
-        config: thesis_config(),
-        sim: orch_sim::SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link,
-    };
+    let setup = Setup::thesis().with_link(link);
     let control: Arc<Control> = Control::new();
     let mut paused_views = 0;
     let mut asked = false;
@@ -129,16 +111,13 @@ fn pause_and_resume(link: Link, midi: bool) {
         }
     };
     let mut out = MidiRecording::default();
-    let played = perform(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        midi.then_some(&mut out),
-        &mut VirtualClock::new(),
-        Some(&control),
-        Some(&mut live),
-    )
-    .unwrap();
+    let mut performer = Performer::new(&setup, song_events(&song), song.notes())
+        .control(&control)
+        .live(&mut live);
+    if midi {
+        performer = performer.midi(&mut out);
+    }
+    let played = performer.run().unwrap();
     assert_eq!(paused_views, 25);
     let held = at_pause.unwrap();
     // It went on from where it paused: the first view after comes within two wakes (80 ms)
@@ -198,13 +177,7 @@ fn a_change_after_an_early_press_counts_the_note_it_made_late() {
     smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
     smf.extend_from_slice(&trk);
     let song = Song::parse(&smf).unwrap();
-    let setup = Setup {
-        config: thesis_config(),
-        sim: orch_sim::SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    };
+    let setup = Setup::thesis();
     let lead = setup.rules().press_lead_us[24 + 1];
     let control: Arc<Control> = Control::new();
     // The second note's press goes out `lead` before 1 s; three times as fast from then.
@@ -212,16 +185,12 @@ fn a_change_after_an_early_press_counts_the_note_it_made_late() {
         c.set_tempo(Tempo::new(3.0).unwrap())
     });
     let mut live = |_: &Live| {};
-    let played = perform::<_, MidiRecording>(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        None,
-        &mut clock,
-        Some(&control),
-        Some(&mut live),
-    )
-    .unwrap();
+    let played = Performer::new(&setup, song_events(&song), song.notes())
+        .clock(&mut clock)
+        .control(&control)
+        .live(&mut live)
+        .run()
+        .unwrap();
     assert!(clock.done());
     let r = played.report(None);
     assert!(r.adds_up(), "{r:?}");

@@ -9,9 +9,9 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use orch_perform::{perform, song_events, Link, MidiRecording, Setup, Tempo};
+use orch_perform::{song_events, Performer, Setup};
 use orch_render::{events, soundfont, synth, Settings};
-use orch_seq::{Song, VirtualClock};
+use orch_seq::Song;
 
 fn main() {
     let mut args = std::env::args().skip(1);
@@ -29,16 +29,7 @@ fn main() {
     let load = t.elapsed().as_secs_f64();
     let bytes = std::fs::read(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
     let song = Song::parse(&bytes).unwrap();
-    let setup = Setup {
-        config: orch_perform::thesis_config(),
-        sim: orch_sim::SimConfig {
-            keep: orch_sim::Keep::Everything,
-            ..orch_sim::SimConfig::thesis()
-        },
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    };
+    let setup = Setup::thesis().with_keep(orch_sim::Keep::Everything);
     println!(
         "{} ({} notes), soundfont {} (loaded in {:.3} s)",
         file.display(),
@@ -47,16 +38,9 @@ fn main() {
         load
     );
     let t = Instant::now();
-    let played = perform::<_, MidiRecording>(
-        &setup,
-        song_events(&song),
-        song.notes(),
-        None,
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    let played = Performer::new(&setup, song_events(&song), song.notes())
+        .run()
+        .unwrap();
     let keys = events::from_performance(&played.performance, played.start_us, 36).unwrap();
     let perform_s = t.elapsed().as_secs_f64();
     for (what, keys, before) in [

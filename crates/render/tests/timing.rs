@@ -5,9 +5,9 @@
 
 mod support;
 
-use orch_perform::{perform, song_events, Link, MidiRecording, Played, Setup, Tempo};
+use orch_perform::{song_events, Performer, Played, Setup};
 use orch_render::{events, onset, synth, Settings};
-use orch_seq::{Song, VirtualClock};
+use orch_seq::Song;
 
 const RATE: u32 = 44_100;
 
@@ -43,26 +43,16 @@ fn smf(notes: &[(u32, u8, u8, u32)]) -> Song {
 }
 
 fn play(song: &Song, config: orch_core::Config<{ orch_perform::MAX_BOARDS }>) -> Played {
-    let setup = Setup {
+    let setup = Setup::new(
         config,
-        sim: orch_sim::SimConfig {
+        orch_sim::SimConfig {
             keep: orch_sim::Keep::Everything,
             ..orch_sim::SimConfig::thesis()
         },
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    };
-    perform::<_, MidiRecording>(
-        &setup,
-        song_events(song),
-        song.notes(),
-        None,
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap()
+    );
+    Performer::new(&setup, song_events(song), song.notes())
+        .run()
+        .unwrap()
 }
 
 /// The render of `played` with the test font, both channels.

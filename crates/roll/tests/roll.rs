@@ -289,26 +289,11 @@ fn bar_lines_keys_and_pitch_names_are_drawn() {
 #[test]
 fn a_performance_that_kept_no_sounds_is_refused() {
     let (song, robot) = common::outcomes_song();
-    let setup = orch_perform::Setup {
-        config: robot.config,
-        sim: orch_sim::SimConfig {
-            keep: orch_sim::Keep::Presses,
-            ..robot.sim_config()
-        },
-        compensation: true,
-        tempo: orch_perform::Tempo::NORMAL,
-        link: orch_perform::Link::Direct,
-    };
-    let played = orch_perform::perform::<_, orch_perform::MidiRecording>(
-        &setup,
-        orch_perform::song_events(&song),
-        song.notes(),
-        None,
-        &mut orch_seq::VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    let setup = orch_perform::Setup::for_robot(&robot);
+    let played =
+        orch_perform::Performer::new(&setup, orch_perform::song_events(&song), song.notes())
+            .run()
+            .unwrap();
     assert_eq!(
         orch_roll::build::roll(&song, &played, (36, 96), 1.0, "x"),
         Err(orch_roll::build::BuildError::NoSounds)
@@ -347,26 +332,10 @@ fn a_performance_of_only_some_of_the_songs_notes_is_refused() {
         .iter()
         .filter(|e| e.bytes.note_on().is_some())
         .count();
-    let setup = orch_perform::Setup {
-        config: robot.config,
-        sim: orch_sim::SimConfig {
-            keep: orch_sim::Keep::Everything,
-            ..robot.sim_config()
-        },
-        compensation: true,
-        tempo: orch_perform::Tempo::NORMAL,
-        link: orch_perform::Link::Direct,
-    };
-    let played = orch_perform::perform::<_, orch_perform::MidiRecording>(
-        &setup,
-        events.into_iter(),
-        notes,
-        None,
-        &mut orch_seq::VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    let setup = orch_perform::Setup::for_robot(&robot).with_keep(orch_sim::Keep::Everything);
+    let played = orch_perform::Performer::new(&setup, events.into_iter(), notes)
+        .run()
+        .unwrap();
     assert_eq!(
         orch_roll::build::roll(&song, &played, (36, 96), 1.0, "x"),
         Err(orch_roll::build::BuildError::NotTheSong)
@@ -379,26 +348,12 @@ fn a_performance_that_jumped_is_refused() {
     let (song, robot) = common::outcomes_song();
     let control = orch_perform::Control::new();
     control.jump_to(song.bar_start_us(2).unwrap());
-    let setup = orch_perform::Setup {
-        config: robot.config,
-        sim: orch_sim::SimConfig {
-            keep: orch_sim::Keep::Everything,
-            ..robot.sim_config()
-        },
-        compensation: true,
-        tempo: orch_perform::Tempo::NORMAL,
-        link: orch_perform::Link::Direct,
-    };
-    let played = orch_perform::perform::<_, orch_perform::MidiRecording>(
-        &setup,
-        orch_perform::song_events(&song),
-        song.notes(),
-        None,
-        &mut orch_seq::VirtualClock::new(),
-        Some(&control),
-        None,
-    )
-    .unwrap();
+    let setup = orch_perform::Setup::for_robot(&robot).with_keep(orch_sim::Keep::Everything);
+    let played =
+        orch_perform::Performer::new(&setup, orch_perform::song_events(&song), song.notes())
+            .control(&control)
+            .run()
+            .unwrap();
     assert!(played.jumps > 0);
     assert_eq!(
         orch_roll::build::roll(&song, &played, (36, 96), 1.0, "x"),

@@ -69,13 +69,7 @@ pub fn analyze(robot: &Robot, setup: &Setup, name: &str, bytes: &[u8]) -> Result
         .map_err(|e| words(&e))?;
     let song = orch_stage::load::song(&bytes, name).map_err(|e| words(&e))?;
     // The roll draws each strike to its key-up: the sound events are kept too.
-    let setup = Setup {
-        sim: orch_sim::SimConfig {
-            keep: orch_sim::Keep::Everything,
-            ..setup.sim.clone()
-        },
-        ..setup.clone()
-    };
+    let setup = setup.clone().with_keep(orch_sim::Keep::Everything);
     let (analysis, played) = orch_stage::analyze(&song, robot, &setup).map_err(|e| words(&e))?;
     let svg = orch_stage::analysis::roll_svg(&song, robot, &played, setup.tempo, name)
         .map_err(|e| words(&e))?;

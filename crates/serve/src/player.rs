@@ -446,10 +446,10 @@ impl Player {
             None => None,
             Some(bar) => Some(start_of(&song.analysis.song, bar).map_err(refused)?),
         };
-        let setup = Setup {
-            tempo: Tempo::new(inner.tempo).unwrap_or(Tempo::NORMAL),
-            ..self.setup.clone()
-        };
+        let setup = self
+            .setup
+            .clone()
+            .with_tempo(Tempo::new(inner.tempo).unwrap_or(Tempo::NORMAL));
         let lanes =
             open_lanes(self.outs.clone(), &setup).map_err(|e| Reject::Bad(e.to_string()))?;
         let control = Control::new();

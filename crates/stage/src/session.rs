@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 use orch_io::{Channels, OutSpec, OutStats, Output};
 use orch_perform::{
-    perform, realtime, song_events, Control, Cue, Follow, Follower, Link, Live, PerformError,
+    realtime, song_events, Control, Cue, Follow, Follower, Link, Live, PerformError, Performer,
     Played, ScoreBeats, ScoreEvent, Setup, TapTempo, Tempo, Timed,
 };
 use orch_seq::Song;
@@ -46,14 +46,11 @@ pub fn out_specs(texts: &[String]) -> Result<Vec<OutSpec>, LiveError> {
 pub fn open_lanes(specs: Vec<OutSpec>, setup: &Setup) -> Result<Vec<Lane>, LiveError> {
     let mut lanes = Vec::new();
     for spec in specs {
-        let setup = Setup {
-            link: if spec.is_din() {
-                Link::Din
-            } else {
-                Link::Direct
-            },
-            ..setup.clone()
-        };
+        let setup = setup.clone().with_link(if spec.is_din() {
+            Link::Din
+        } else {
+            Link::Direct
+        });
         let out = Output::open(
             &spec.target,
             &setup.config,
@@ -290,15 +287,14 @@ impl Session {
                 let mut on_live = |l: &Live| {
                     *live_in.lock().unwrap_or_else(|e| e.into_inner()) = Some(l.clone());
                 };
-                let played = perform::<_, Output>(
-                    &setup,
-                    events.into_iter(),
-                    notes,
-                    out.as_mut(),
-                    &mut clock,
-                    Some(&control),
-                    Some(&mut on_live),
-                )?;
+                let mut performer = Performer::new(&setup, events.into_iter(), notes)
+                    .clock(&mut clock)
+                    .control(&control)
+                    .live(&mut on_live);
+                if let Some(out) = out.as_mut() {
+                    performer = performer.midi(out);
+                }
+                let played = performer.run()?;
                 Ok((played, out.as_ref().map(Output::stats)))
             });
             senders.push(Sender { spec, thread });

@@ -2,13 +2,10 @@
 //! front end may ask for, and a performance on the virtual clock (as fast as the machine
 //! goes: a ten-minute piece in a few tens of ms).
 
-use orch_io::Output;
 use orch_perform::follow::FACTOR_RANGE;
-use orch_perform::{
-    perform, song_events, Control, Link, MidiRecording, Played, Setup, Spread, Tempo,
-};
+use orch_perform::{song_events, Control, Performer, Played, Setup, Spread, Tempo};
 use orch_robot::Robot;
-use orch_seq::{Song, VirtualClock};
+use orch_seq::Song;
 
 use crate::session::{lane_events, Ended, Lane};
 use crate::StageError;
@@ -24,30 +21,14 @@ pub fn tempo(factor: f64) -> Result<Tempo, StageError> {
 
 /// How `robot` plays, with or without compensation, at `tempo`, on this host.
 pub fn setup(robot: &Robot, compensation: bool, tempo: Tempo) -> Setup {
-    Setup {
-        config: robot.config,
-        // The report needs the presses and the figures, not every write and edge.
-        sim: orch_sim::SimConfig {
-            keep: orch_sim::Keep::Presses,
-            ..robot.sim_config()
-        },
-        compensation,
-        tempo,
-        link: Link::Direct,
-    }
+    Setup::for_robot(robot)
+        .with_compensation(compensation)
+        .with_tempo(tempo)
 }
 
 /// Plays `song` on the virtual robot alone, on the virtual clock.
 pub fn play_fast(song: &Song, setup: &Setup) -> Result<Played, StageError> {
-    Ok(perform::<_, MidiRecording>(
-        setup,
-        song_events(song),
-        song.notes(),
-        None,
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )?)
+    Ok(Performer::new(setup, song_events(song), song.notes()).run()?)
 }
 
 /// Plays `song` on every lane's virtual robot in turn, on the virtual clock, from `from_us`
@@ -73,15 +54,11 @@ pub fn play_lanes_fast(
                 c.jump_to(t);
                 c
             });
-            let played = perform::<_, Output>(
-                &l.setup,
-                events.into_iter(),
-                notes,
-                None,
-                &mut VirtualClock::new(),
-                control.as_deref(),
-                None,
-            )?;
+            let mut performer = Performer::new(&l.setup, events.into_iter(), notes);
+            if let Some(c) = control.as_deref() {
+                performer = performer.control(c);
+            }
+            let played = performer.run()?;
             Ok(Ended {
                 spec: l.spec,
                 played,
@@ -97,9 +74,6 @@ pub fn uncompensated(song: &Song, setup: &Setup) -> Result<Option<Spread>, Stage
     if !setup.compensation {
         return Ok(None);
     }
-    let plain = Setup {
-        compensation: false,
-        ..setup.clone()
-    };
+    let plain = setup.clone().with_compensation(false);
     Ok(Some(Spread::of_onsets(&play_fast(song, &plain)?.records)))
 }

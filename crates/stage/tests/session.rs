@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use orch_io::OutSpec;
-use orch_perform::{Control, Link, Setup, Tempo};
+use orch_perform::{Control, Setup, Tempo};
 use orch_robot::Robot;
 use orch_seq::Song;
 use orch_stage::session::{open_lanes, Session};
@@ -17,16 +17,7 @@ mod smf;
 
 fn setup() -> Setup {
     let robot = Robot::thesis();
-    Setup {
-        config: robot.config,
-        sim: orch_sim::SimConfig {
-            keep: orch_sim::Keep::Presses,
-            ..robot.sim_config()
-        },
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    }
+    Setup::for_robot(&robot)
 }
 
 /// 8 quarter notes at 480 BPM: 1 s.

@@ -29,12 +29,10 @@ use std::sync::Arc;
 use orch_calibrate::fit::db_of_loudness;
 use orch_calibrate::synthetic::{HiddenKey, Rng, Solenoid};
 use orch_calibrate::{Recording, Score};
-use orch_perform::{
-    perform, song_events, Link, MidiRecording, Outcome, Played, ScoreEvent, Setup, Tempo,
-};
+use orch_perform::{song_events, MidiRecording, Outcome, Performer, Played, ScoreEvent, Setup};
 use orch_render::{events, soundfont, synth, Action, KeyEvent, Settings, SoundFont};
 use orch_robot::Robot;
-use orch_seq::{Song, VirtualClock, WireBytes};
+use orch_seq::{Song, WireBytes};
 
 /// The rate everything is rendered at.
 pub const RATE: u32 = 44_100;
@@ -159,30 +157,16 @@ pub fn hidden(input: &str, softest: (f64, f64), seed: u64) -> Hidden {
 
 /// How `robot` plays on the virtual clock, every sound kept.
 pub fn setup(robot: &Robot, compensation: bool) -> Setup {
-    Setup {
-        config: robot.config,
-        sim: orch_sim::SimConfig {
-            keep: orch_sim::Keep::Everything,
-            ..robot.sim_config()
-        },
-        compensation,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    }
+    Setup::for_robot(robot)
+        .with_keep(orch_sim::Keep::Everything)
+        .with_compensation(compensation)
 }
 
 /// Plays `song` as `setup` says, on the virtual clock.
 pub fn play(song: &Song, setup: &Setup) -> Played {
-    perform::<_, MidiRecording>(
-        setup,
-        song_events(song),
-        song.notes(),
-        None,
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap()
+    Performer::new(setup, song_events(song), song.notes())
+        .run()
+        .unwrap()
 }
 
 /// The room.
@@ -368,15 +352,13 @@ pub fn onset_errors(song: &Song, file: &Robot, mechanics: &orch_sim::MechanicsCo
         ..file.clone()
     };
     let mut sends = MidiRecording::default();
-    let planned = perform(
+    let planned = Performer::new(
         &setup(believed, true),
         orch_perform::song_events(song),
         song.notes(),
-        Some(&mut sends),
-        &mut VirtualClock::new(),
-        None,
-        None,
     )
+    .midi(&mut sends)
+    .run()
     .unwrap();
     // The sends, running status undone, from 1 s on (the first may precede the song).
     let t0 = sends.sent.first().map_or(0, |s| s.0);
@@ -397,16 +379,9 @@ pub fn onset_errors(song: &Song, file: &Robot, mechanics: &orch_sim::MechanicsCo
             bytes: b,
         });
     }
-    let played = perform::<_, MidiRecording>(
-        &setup(actual, false),
-        events.into_iter(),
-        notes,
-        None,
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .unwrap();
+    let played = Performer::new(&setup(actual, false), events.into_iter(), notes)
+        .run()
+        .unwrap();
     // Each note of the second performance is a send of the first: (its send time, note) finds
     // the score note it was.
     let score_of: std::collections::HashMap<(u64, u8), i64> = planned

@@ -9,8 +9,8 @@ use std::sync::Arc;
 
 use orch_perform::conduct::encode_osc;
 use orch_perform::{
-    perform, song_events, thesis_config, Action, Control, Cue, Follow, Follower, Link, MidiClock,
-    MidiRecording, OscCues, Outcome, ScoreBeats, Setup, Tempo, Timed,
+    song_events, Action, Control, Cue, Follow, Follower, MidiClock, OscCues, Outcome, Performer,
+    ScoreBeats, Setup, Timed,
 };
 use orch_seq::{Bell, Clock, Lateness, Song, VirtualClock};
 
@@ -107,13 +107,7 @@ impl<F: FnMut(u64, Option<usize>, &Control) -> Option<u64>> Clock for Conducted<
 
 /// The thesis's robot, compensation on, as written.
 pub fn setup() -> Setup {
-    Setup {
-        config: thesis_config(),
-        sim: orch_sim::SimConfig::thesis(),
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    }
+    Setup::thesis()
 }
 
 /// How the beats reach the follower.
@@ -292,16 +286,12 @@ pub fn conduct(song: &Song, input: &[(u64, Vec<u8>)], via: Via, follow: Follow) 
         },
     );
     let mut live = |_: &orch_perform::Live| {};
-    let played = perform::<_, MidiRecording>(
-        &setup(),
-        song_events(song),
-        song.notes(),
-        None,
-        &mut clock,
-        Some(&control),
-        Some(&mut live),
-    )
-    .unwrap();
+    let played = Performer::new(&setup(), song_events(song), song.notes())
+        .clock(&mut clock)
+        .control(&control)
+        .live(&mut live)
+        .run()
+        .unwrap();
     drop(clock);
     let r = played.report(None);
     assert!(r.adds_up(), "{r:?}");

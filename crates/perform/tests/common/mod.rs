@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use orch_core::Config;
 use orch_perform::{
-    perform, thesis_config, Control, Link, MidiOut, MidiRecording, Played, ScoreEvent, Setup, Tempo,
+    thesis_config, Control, Link, MidiOut, MidiRecording, Performer, Played, ScoreEvent, Setup,
 };
 use orch_seq::{Song, VirtualClock};
 
@@ -29,16 +29,14 @@ pub fn corpus_song(file: &str) -> Song {
 /// The thesis's robot with `config`'s settings on a 400 kHz bus, compensation on, at the
 /// written tempo, over `link`.
 pub fn setup_with(config: Config<16>, link: Link) -> Setup {
-    Setup {
+    Setup::new(
         config,
-        sim: orch_sim::SimConfig {
+        orch_sim::SimConfig {
             clock: orch_sim::BusClock::FAST,
             ..orch_sim::SimConfig::thesis()
         },
-        compensation: true,
-        tempo: Tempo::NORMAL,
-        link,
-    }
+    )
+    .with_link(link)
 }
 
 /// [`setup_with`] the thesis's configuration.
@@ -53,15 +51,11 @@ pub fn render_to<M: MidiOut>(
     notes: usize,
     midi: Option<&mut M>,
 ) -> Played {
-    perform(
-        setup,
-        events,
-        notes,
-        midi,
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
+    let performer = Performer::new(setup, events, notes);
+    match midi {
+        Some(out) => performer.midi(out).run(),
+        None => performer.run(),
+    }
     .unwrap()
 }
 
@@ -163,14 +157,12 @@ pub fn pwm_setup(mechanics: orch_sim::MechanicsConfig, compensation: bool) -> Se
         kinds: vec![orch_core::BoardKind::Pwm; 4],
         ..orch_sim::SimConfig::thesis().with_layout(&config.layout)
     };
-    Setup {
+    Setup::new(
         config,
-        sim: orch_sim::SimConfig {
+        orch_sim::SimConfig {
             boards: sim.boards[..4].to_vec(),
             ..sim
         },
-        compensation,
-        tempo: Tempo::NORMAL,
-        link: Link::Direct,
-    }
+    )
+    .with_compensation(compensation)
 }

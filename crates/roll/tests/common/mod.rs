@@ -1,10 +1,10 @@
 //! Two small hand-made songs, performed on the virtual robot and drawn.
 #![allow(dead_code)]
 
-use orch_perform::{perform, song_events, Link, MidiRecording, Played, Setup, Tempo};
+use orch_perform::{song_events, Performer, Played, Setup, Tempo};
 use orch_robot::Robot;
 use orch_roll::Roll;
-use orch_seq::{Song, VirtualClock};
+use orch_seq::Song;
 
 /// A format-0 SMF at 480 ticks a quarter (120 bpm: a tick is 1.0417 ms) with a 3/4 time
 /// signature, of `events` as (absolute tick, bytes), sorted by tick (stable).
@@ -102,26 +102,12 @@ pub fn play(song: &Song, robot: &Robot) -> Played {
 
 /// [`play`] at `tempo`.
 pub fn play_at(song: &Song, robot: &Robot, tempo: Tempo) -> Played {
-    let setup = Setup {
-        config: robot.config,
-        sim: orch_sim::SimConfig {
-            keep: orch_sim::Keep::Everything,
-            ..robot.sim_config()
-        },
-        compensation: true,
-        tempo,
-        link: Link::Direct,
-    };
-    perform::<_, MidiRecording>(
-        &setup,
-        song_events(song),
-        song.notes(),
-        None,
-        &mut VirtualClock::new(),
-        None,
-        None,
-    )
-    .expect("a performance")
+    let setup = Setup::for_robot(robot)
+        .with_keep(orch_sim::Keep::Everything)
+        .with_tempo(tempo);
+    Performer::new(&setup, song_events(song), song.notes())
+        .run()
+        .expect("a performance")
 }
 
 /// The roll of `song` on `robot`.
