@@ -30,7 +30,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use orch_io::OutSpec;
-use orch_perform::{Control, Link, Played, Setup, Tempo};
+use orch_perform::{Control, Played, Setup};
 use orch_seq::Song;
 use orch_stage::session::{open_lanes, Session, SessionFailure};
 
@@ -204,16 +204,7 @@ impl Keep {
 /// How the robot plays the score: as `orch play --no-compensation` sets it up (only the
 /// presses kept of the virtual robot's account), at the written tempo.
 pub fn setup(robot: &orch_robot::Robot) -> Setup {
-    Setup {
-        config: robot.config,
-        sim: orch_sim::SimConfig {
-            keep: orch_sim::Keep::Presses,
-            ..robot.sim_config()
-        },
-        compensation: false,
-        tempo: Tempo::new(1.0).expect("1 is a tempo"),
-        link: Link::Direct,
-    }
+    Setup::for_robot(robot).with_compensation(false)
 }
 
 /// Plays `score` on the robot at `out` and records it from `mic` at once (see the
