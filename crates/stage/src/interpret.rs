@@ -200,6 +200,20 @@ impl End {
     }
 }
 
+/// The drop counts of strike and fingered groups, where there are any: `, percussion N,
+/// unmapped N, monophonic N` (the parts of `dropped` a keyboard alone never has).
+fn group_drops(s: &orch_core::Stats) -> String {
+    [
+        ("percussion", s.dropped_percussion),
+        ("unmapped", s.dropped_unmapped),
+        ("monophonic", s.dropped_monophonic),
+    ]
+    .iter()
+    .filter(|(_, n)| *n > 0)
+    .map(|(name, n)| format!(", {name} {n}"))
+    .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -255,18 +269,4 @@ mod tests {
             "     61.600 ms  timer       0x22 <- 0x0100  |........#.......|"
         );
     }
-}
-
-/// The drop counts of strike and fingered groups, where there are any: `, percussion N,
-/// unmapped N, monophonic N` (the parts of `dropped` a keyboard alone never has).
-fn group_drops(s: &orch_core::Stats) -> String {
-    [
-        ("percussion", s.dropped_percussion),
-        ("unmapped", s.dropped_unmapped),
-        ("monophonic", s.dropped_monophonic),
-    ]
-    .iter()
-    .filter(|(_, n)| *n > 0)
-    .map(|(name, n)| format!(", {name} {n}"))
-    .collect()
 }
