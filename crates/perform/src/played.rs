@@ -33,7 +33,7 @@ pub struct Played {
     pub restrikes_waited: u64,
     /// Whether it was stopped before the end.
     pub stopped: bool,
-    /// Jumps taken ([`Control::jump_to`]).
+    /// Jumps taken ([`Control::jump_to`](crate::Control::jump_to)).
     pub jumps: u64,
     /// Notes the performance came to again after a jump back: `records` holds the score's
     /// notes plus these (each pass over a note is a record of its own).
