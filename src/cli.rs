@@ -352,8 +352,9 @@ pub struct ConfigArgs {
     #[arg(long, value_name = "KIND", default_value = "pca9555", value_parser = ["pca9555", "tca9555", "pca9685"])]
     pub boards: String,
     /// The instrument: piano (the thesis's 61-key robot), drums (a General MIDI kit on
-    /// channel 10: kick, snare, hi-hat and its pedal, three toms, crash, ride) or
-    /// glockenspiel (30 bars, G5 to C8).
-    #[arg(long, value_name = "NAME", default_value = "piano", value_parser = ["piano", "drums", "glockenspiel"])]
+    /// channel 10: kick, snare, hi-hat and its pedal, three toms, crash, ride),
+    /// glockenspiel (30 bars, G5 to C8) or recorder (a soprano recorder's valve and fingers,
+    /// C5 to D7, one note at a time).
+    #[arg(long, value_name = "NAME", default_value = "piano", value_parser = ["piano", "drums", "glockenspiel", "recorder"])]
     pub instrument: String,
 }

@@ -62,6 +62,8 @@ struct File {
     dynamics: DynamicsFile,
     #[serde(default)]
     strike: Vec<crate::strike::StrikeFile>,
+    #[serde(default)]
+    fingered: Vec<crate::fingered::FingeredFile>,
 }
 
 #[derive(Deserialize)]
@@ -579,20 +581,23 @@ impl File {
         let channels = channels(&k.channels, "keys.channels")?;
         let (layout, kinds) = boards(self.boards.as_deref())?;
         let strikes = crate::strike::read(&self.strike, k.enabled, range.keys())?;
-        if !k.enabled && self.strike.is_empty() {
+        if !k.enabled && self.strike.is_empty() && self.fingered.is_empty() {
             return Err(RobotError::field(
                 "keys.enabled",
-                "false, and the robot has no [[strike]] group: it would play nothing",
+                "false, and the robot has no [[strike]] or [[fingered]] group: it would play nothing",
             ));
         }
         let keyboard_keys = if k.enabled { range.keys() } else { 0 };
-        let outputs = keyboard_keys + strikes.strikes.outputs();
+        let before_wind = keyboard_keys + strikes.strikes.outputs();
+        let wind = crate::fingered::read(&self.fingered, before_wind)?;
+        let wind_outputs = wind.as_ref().map_or(0, |w| w.wind.outputs());
+        let outputs = before_wind + wind_outputs;
         if layout.keys() != outputs {
-            let what = if self.strike.is_empty() {
+            let what = if self.strike.is_empty() && wind.is_none() {
                 format!("keys.low..=keys.high has {}", range.keys())
             } else {
                 format!(
-                    "the keyboard has {keyboard_keys} keys and the strike groups {} outputs",
+                    "the keyboard has {keyboard_keys} keys, the strike groups {} outputs and the fingered group {wind_outputs}",
                     strikes.strikes.outputs()
                 )
             };
@@ -620,13 +625,18 @@ impl File {
             guard,
             dynamics,
             strikes: strikes.strikes,
-            wind: orch_core::Wind::NONE,
+            wind: wind.as_ref().map_or(orch_core::Wind::NONE, |w| w.wind),
         };
         let mut groups = Vec::new();
         if k.enabled {
             groups.push(crate::Group::keyboard(range, channels));
         }
         groups.extend(strikes.groups);
+        let mut outputs_mechanics = strikes.mechanics;
+        if let Some(w) = wind {
+            groups.push(w.group);
+            outputs_mechanics.extend(w.mechanics);
+        }
         config
             .validate(MAX_KEYS)
             .map_err(|e| crate::strike::named(e, &groups).unwrap_or_else(|| config_error(e)))?;
@@ -638,7 +648,7 @@ impl File {
             clock: clock(&self.bus.clock)?,
             mechanics: crate::strike::with_outputs(
                 mechanics(&self.mechanics, range)?,
-                &strikes.mechanics,
+                &outputs_mechanics,
             ),
             groups,
         })
@@ -680,7 +690,7 @@ fn pwm_frequency(text: &str) -> Result<u32, RobotError> {
 }
 
 /// Parses a duty written in per cent, "45%", 0..=100.
-fn duty(field: &str, text: &str) -> Result<orch_core::Duty, RobotError> {
+pub(crate) fn duty(field: &str, text: &str) -> Result<orch_core::Duty, RobotError> {
     let t = text.trim();
     let Some(number) = t.strip_suffix('%') else {
         return Err(RobotError::field(

@@ -14,12 +14,15 @@ pub enum GroupKind {
     /// Pitched strikes: a glockenspiel, one output a note (`[[strike]]` with `low` and
     /// `high`).
     Pitched,
+    /// A wind instrument (`[[fingered]]`): its valve (output 0, which every note lands on)
+    /// and its fingers, one note at a time.
+    Fingered,
 }
 
 impl GroupKind {
     /// Whether its outputs strike (a pulse that ends by itself) rather than hold.
     pub fn strikes(self) -> bool {
-        self != GroupKind::Keyboard
+        matches!(self, GroupKind::Kit | GroupKind::Pitched)
     }
 }
 

@@ -12,14 +12,18 @@ pub enum Instrument {
     Drums,
     /// A glockenspiel of 30 bars, G5 to C8 (MIDI 79–108), sounding as written.
     Glockenspiel,
+    /// A soprano recorder, C5 to D7 (MIDI 72–98), sounding as written: a valve and eleven
+    /// finger solenoids, baroque fingering.
+    Recorder,
 }
 
 impl Instrument {
     /// Every instrument, in the order `orch config --help` lists them.
-    pub const ALL: [Instrument; 3] = [
+    pub const ALL: [Instrument; 4] = [
         Instrument::Piano,
         Instrument::Drums,
         Instrument::Glockenspiel,
+        Instrument::Recorder,
     ];
 
     /// Its name on the command line: `piano`, `drums`, `glockenspiel`.
@@ -28,6 +32,7 @@ impl Instrument {
             Instrument::Piano => "piano",
             Instrument::Drums => "drums",
             Instrument::Glockenspiel => "glockenspiel",
+            Instrument::Recorder => "recorder",
         }
     }
 }
@@ -39,6 +44,7 @@ pub fn instrument_toml(instrument: Instrument, kind: BoardKind) -> String {
         Instrument::Piano => return crate::default_toml(kind),
         Instrument::Drums => DRUMS_TOML,
         Instrument::Glockenspiel => GLOCKENSPIEL_TOML,
+        Instrument::Recorder => RECORDER_TOML,
     };
     let text = format!("{text}{COMMON_TOML}");
     match kind {
@@ -226,7 +232,190 @@ return_delay = "10ms"
 mute_after = "10ms"
 "#;
 
-/// What every strike robot shares with the piano: bus, guard, PWM and dynamics.
+/// The soprano recorder.
+const RECORDER_TOML: &str = r#"# orch robot configuration (robot.toml): a soprano recorder, C5 to D7 (MIDI 72-98)
+# Every field is optional but the fingering table; a missing one takes the value shown here.
+
+# No keyboard: this robot is the recorder below.
+[keys]
+enabled = false
+
+# One board drives the valve and the eleven fingers, in the order of fingered.fingers after
+# the valve: the valve on bit 0, the thumb on bit 1, 7b on bit 11.
+[[boards]]
+kind = "pca9555"
+address = 0x21
+keys = 12
+first_bit = 0
+
+# A fingered group: one note at a time. A new note closes the valve, sets the fingers once the
+# air has stopped, waits for them to settle and opens the valve; the valve is never open while
+# a finger moves. The performer sends each note early by that time, so it sounds on the beat.
+#   channels: the channels it plays ("melodic": all but 10).
+#   voice: which note of a chord it plays: "highest" (the melody), "lowest" or "last". The
+#     others are dropped as "monophonic".
+#   fingers: the finger solenoids' names, in board order after the valve. A soprano recorder
+#     has a thumb hole, seven finger holes and double holes for 6 and 7 (6a 6b, 7a 7b);
+#     "pinch" is a second pad that leaves the thumb hole a crack open, for the upper octave.
+#   close: from the valve closing to the air stopping (the fingers move after it).
+#   settle: from the fingers moving to the valve opening: a solenoid's travel and bounce (30 ms;
+#     glloq's servo flute needs 105 ms for its servos).
+#   air: from the valve opening to the note sounding.
+#   program: the General MIDI program `orch render` plays it with (75: recorder).
+# Each [[fingered.note]] gives a note's fingering (the fingers closed) and its breath (the
+# valve's duty at velocity 127 on a PCA9685 board: high notes need more air; on/off boards
+# open the valve fully). The table is the baroque (English) fingering of a soprano recorder
+# as Dolmetsch's recorder method writes it (0 1 2 3 4 5 6 7; "6" is both 6a and 6b), sounding
+# as written. The third octave's fingerings vary most between instruments (C#7 and D7
+# especially): check yours. Notes outside fold by octaves.
+[[fingered]]
+name = "recorder"
+channels = "melodic"
+voice = "highest"
+out_of_range = "fold"
+program = 75
+fingers = ["thumb", "pinch", "1", "2", "3", "4", "5", "6a", "6b", "7a", "7b"]
+close = "5ms"
+settle = "30ms"
+air = "15ms"
+
+[[fingered.note]]
+note = 72   # C5
+fingers = "thumb 1 2 3 4 5 6a 6b 7a 7b"
+breath = "45%"
+
+[[fingered.note]]
+note = 73   # C#5
+fingers = "thumb 1 2 3 4 5 6a 6b 7a"
+breath = "47%"
+
+[[fingered.note]]
+note = 74   # D5
+fingers = "thumb 1 2 3 4 5 6a 6b"
+breath = "49%"
+
+[[fingered.note]]
+note = 75   # D#5
+fingers = "thumb 1 2 3 4 5 6a"
+breath = "51%"
+
+[[fingered.note]]
+note = 76   # E5
+fingers = "thumb 1 2 3 4 5"
+breath = "53%"
+
+[[fingered.note]]
+note = 77   # F5
+fingers = "thumb 1 2 3 4 6a 6b 7a 7b"
+breath = "56%"
+
+[[fingered.note]]
+note = 78   # F#5
+fingers = "thumb 1 2 3 5 6a 6b"
+breath = "58%"
+
+[[fingered.note]]
+note = 79   # G5
+fingers = "thumb 1 2 3"
+breath = "60%"
+
+[[fingered.note]]
+note = 80   # G#5
+fingers = "thumb 1 2 4 5"
+breath = "62%"
+
+[[fingered.note]]
+note = 81   # A5
+fingers = "thumb 1 2"
+breath = "64%"
+
+[[fingered.note]]
+note = 82   # A#5
+fingers = "thumb 1 3 4"
+breath = "66%"
+
+[[fingered.note]]
+note = 83   # B5
+fingers = "thumb 1"
+breath = "68%"
+
+[[fingered.note]]
+note = 84   # C6
+fingers = "thumb 2"
+breath = "70%"
+
+[[fingered.note]]
+note = 85   # C#6
+fingers = "1 2"
+breath = "72%"
+
+[[fingered.note]]
+note = 86   # D6
+fingers = "2"
+breath = "75%"
+
+[[fingered.note]]
+note = 87   # D#6
+fingers = "2 3 4 5 6a 6b"
+breath = "77%"
+
+[[fingered.note]]
+note = 88   # E6
+fingers = "pinch 1 2 3 4 5"
+breath = "79%"
+
+[[fingered.note]]
+note = 89   # F6
+fingers = "pinch 1 2 3 4 6a 6b"
+breath = "81%"
+
+[[fingered.note]]
+note = 90   # F#6
+fingers = "pinch 1 2 3 5"
+breath = "83%"
+
+[[fingered.note]]
+note = 91   # G6
+fingers = "pinch 1 2 3"
+breath = "85%"
+
+[[fingered.note]]
+note = 92   # G#6
+fingers = "pinch 1 2 4"
+breath = "87%"
+
+[[fingered.note]]
+note = 93   # A6
+fingers = "pinch 1 2"
+breath = "89%"
+
+[[fingered.note]]
+note = 94   # A#6
+fingers = "pinch 1 2 4 5 6a 6b"
+breath = "92%"
+
+[[fingered.note]]
+note = 95   # B6
+fingers = "pinch 1 2 4 5"
+breath = "94%"
+
+[[fingered.note]]
+note = 96   # C7
+fingers = "pinch 1 4 5"
+breath = "96%"
+
+[[fingered.note]]
+note = 97   # C#7
+fingers = "pinch 1 2 4 6a 6b"
+breath = "98%"
+
+[[fingered.note]]
+note = 98   # D7
+fingers = "pinch 1 2 4 5 7a 7b"
+breath = "100%"
+"#;
+
+/// What every strike or wind robot shares with the piano: bus, guard, PWM and dynamics.
 const COMMON_TOML: &str = r#"
 # The I2C bus to the boards: "100kHz", "400kHz" or "1MHz" (any clock from 1 kHz to 1 MHz).
 # The PCA9555 is rated for 400 kHz, the PCA9685 for 1 MHz.

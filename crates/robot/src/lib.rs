@@ -24,6 +24,7 @@ use orch_sim::{BusClock, MechanicsConfig, SimConfig};
 
 mod error;
 mod file;
+mod fingered;
 mod group;
 mod instrument;
 mod strike;
