@@ -123,6 +123,13 @@ fn outputs(robot: &Robot) -> Vec<Output> {
                         .unwrap_or(GLOCKENSPIEL),
                     note,
                 ),
+                // The valve: each of its notes at its own pitch, held until the valve closes.
+                GroupKind::Fingered => Output::voice(
+                    g.program
+                        .and_then(Instrument::gm_program)
+                        .unwrap_or(RECORDER),
+                    note,
+                ),
             }
         })
         .collect()
@@ -130,6 +137,8 @@ fn outputs(robot: &Robot) -> Vec<Output> {
 
 /// General MIDI's glockenspiel (program 10 as people count).
 const GLOCKENSPIEL: Instrument = Instrument::Program(9);
+/// General MIDI's recorder (program 75 as people count).
+const RECORDER: Instrument = Instrument::Program(74);
 
 /// Which note each strike of the performance was, as written: every note that sounded with a
 /// strike of its own, its landing key and its sound time (the account's `sounded_ms`, in µs on
@@ -139,7 +148,8 @@ fn strike_notes(played: &Played) -> Vec<events::StrikeNote> {
         .records
         .iter()
         .filter_map(|r| {
-            let key = r.landing?.key;
+            let landing = r.landing?;
+            let key = landing.key;
             let onset_us = match r.outcome {
                 orch_perform::Outcome::OnTime { error_us } => i64::from(error_us),
                 orch_perform::Outcome::Late { by_us } => i64::from(by_us),
@@ -150,7 +160,8 @@ fn strike_notes(played: &Played) -> Vec<events::StrikeNote> {
             Some(events::StrikeNote {
                 key,
                 sounded_us,
-                note: r.note,
+                // As it sounds: a note folded into a wind robot's range sounds where it landed.
+                note: (i16::from(r.note) + 12 * i16::from(landing.octaves)).clamp(0, 127) as u8,
             })
         })
         .collect()

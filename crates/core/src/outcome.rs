@@ -119,6 +119,17 @@ pub enum NoteEvent {
         /// Its key (the output it strikes, not the lead).
         at: Landing,
     },
+    /// A fingered group's note ([`wind`](crate::wind)): its fingers are being set; it sounds
+    /// when the valve opens ([`NoteEvent::WaitOver`]) unless another note takes its place
+    /// first ([`NoteEvent::WaitEnded`]).
+    Preparing {
+        /// The note's channel.
+        channel: Channel,
+        /// The note.
+        note: Note,
+        /// Its key: the group's valve.
+        at: Landing,
+    },
     /// Another note holds the key already (down, or about to strike): this one sounds with
     /// it and makes no strike of its own.
     Joined {

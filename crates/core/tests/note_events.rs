@@ -54,6 +54,7 @@ impl Rig {
                     NoteEvent::Struck { .. } => "struck",
                     NoteEvent::Waiting { .. } => "waiting",
                     NoteEvent::Leading { .. } => "leading",
+                    NoteEvent::Preparing { .. } => "preparing",
                     NoteEvent::Joined {
                         with_strike: true, ..
                     } => "unison",

@@ -75,7 +75,7 @@ fn a_note_sets_its_fingers_then_opens_the_valve_once_they_have_settled() {
     assert_eq!(fingers_at(&rig), 0b110);
     assert_eq!(edges(&rig, VALVE), [(SETTLE, true)]);
     assert_eq!(edges(&rig, finger(1)), [(0, true)]);
-    assert!(matches!(events[0], NoteEvent::Waiting { at, .. } if at.key == VALVE));
+    assert!(matches!(events[0], NoteEvent::Preparing { at, .. } if at.key == VALVE));
     // Its Note-Off closes the valve; the fingers let go once the air has stopped.
     rig.feed(&[0x80, 73, 0], ms(500));
     rig.run_until(ms(1_000));

@@ -209,7 +209,9 @@ impl Ledger {
                 self.entry(id).landing = Some(at);
                 self.strike(id, at.key, t_us);
             }
-            NoteEvent::Waiting { at, .. } | NoteEvent::Leading { at, .. } => {
+            NoteEvent::Waiting { at, .. }
+            | NoteEvent::Leading { at, .. }
+            | NoteEvent::Preparing { at, .. } => {
                 let Some(id) = self.in_flight.pop_front() else {
                     return;
                 };
@@ -217,7 +219,8 @@ impl Ledger {
                 let k = at.key as usize;
                 if let (Some(w), Some(l)) = (self.waiting.get_mut(k), self.leading.get_mut(k)) {
                     *w = Some(id);
-                    *l = matches!(event, NoteEvent::Leading { .. });
+                    // Waiting for a lead or a wind note's fingers: not a re-strike's rest.
+                    *l = !matches!(event, NoteEvent::Waiting { .. });
                 }
             }
             NoteEvent::Joined {

@@ -42,6 +42,8 @@
 
 use std::collections::BTreeMap;
 
+mod wind;
+
 use orch_core::{Channel, DropReason, Landing, Note, Overlap};
 use orch_seq::WireBytes;
 
@@ -98,10 +100,29 @@ impl KeyMap {
             .map_or(0, |(_, t)| t.as_micros() as u64)
     }
 
-    /// The longest lead time of any note, µs.
+    /// Whether `key` is the fingered group's valve (every note of the group lands on it).
+    pub fn wind(&self, key: usize) -> bool {
+        self.0.wind.is_on() && key == usize::from(self.0.wind.valve())
+    }
+
+    /// The fingered group's settle and close times, µs.
+    pub fn wind_times_us(&self) -> (i64, i64) {
+        let w = &self.0.wind;
+        (w.settle.as_micros() as i64, w.close.as_micros() as i64)
+    }
+
+    /// The longest lead time of any note beyond its press lead, µs: a strike's lead, or a
+    /// wind note's settle and close.
     pub fn max_lead_us(&self) -> u64 {
         let times = self.0.strikes.lead_times.iter();
-        times.map(|t| t.as_micros() as u64).max().unwrap_or(0)
+        let strike = times.map(|t| t.as_micros() as u64).max().unwrap_or(0);
+        let (settle, close) = self.wind_times_us();
+        let wind = if self.0.wind.is_on() {
+            (settle + close) as u64
+        } else {
+            0
+        };
+        strike.max(wind)
     }
 }
 
@@ -255,6 +276,8 @@ pub struct Planner<S: Iterator<Item = ScoreEvent>> {
     pedals: u16,
     eager: bool,
     stats: PlanStats,
+    /// The fingered group's Note-Offs and valve.
+    wind: wind::WindPlan,
 }
 
 /// A score note a jump passed over or left unsent.
@@ -334,6 +357,7 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
             pedals: 0,
             eager: false,
             stats: PlanStats::default(),
+            wind: Default::default(),
         }
     }
 
@@ -743,6 +767,10 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
             return;
         };
         let k = usize::from(land.key);
+        if self.rules.keys.wind(k) {
+            self.wind_on(ch, k, w, bytes, id);
+            return;
+        }
         let velocity = bytes.note_on().map_or(0, |(_, _, v)| v);
         let lead = self.rules.press_lead(k, velocity) as i64;
         if self.rules.keys.strikes(k) {
@@ -908,6 +936,10 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
             return;
         };
         let k = usize::from(land.key);
+        if self.rules.keys.wind(k) {
+            self.wind_off(ch, w, bytes);
+            return;
+        }
         if self.rules.keys.strikes(k) {
             // A strike's Note-Off does nothing: sent at its time.
             let at = self.after_controller(ch, w);

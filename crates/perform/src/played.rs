@@ -43,6 +43,8 @@ pub struct Played {
     /// Per key: whether it is a lead or a damper (an open hi-hat's lift, a bar's damper): an
     /// output no note strikes itself, whose presses are not notes' strikes.
     pub extra_keys: Vec<bool>,
+    /// Per key: whether it is a wind robot's finger (its notes sound on its valve).
+    pub finger_keys: Vec<bool>,
 }
 
 impl Played {
@@ -60,18 +62,22 @@ impl Played {
         let bus = self.performance.summary.bus;
         let span = self.end_us.saturating_sub(self.start_us).max(1) as f64;
         let s = &self.stats;
-        let extra = |e: &&orch_sim::SoundEvent| {
-            e.kind == orch_sim::SoundKind::Down
-                && self.extra_keys.get(usize::from(e.key)) == Some(&true)
+        let downs_of = |keys: &[bool]| {
+            let down = |e: &&orch_sim::SoundEvent| {
+                e.kind == orch_sim::SoundKind::Down && keys.get(usize::from(e.key)) == Some(&true)
+            };
+            self.performance.sounds.iter().filter(down).count() as u64
         };
-        let lifts_and_dampers = self.performance.sounds.iter().filter(extra).count() as u64;
+        let lifts_and_dampers = downs_of(&self.extra_keys);
+        let fingers = downs_of(&self.finger_keys);
         Report {
             notes: (self.records.len() as u64).saturating_sub(self.replayed),
             jumps: self.jumps,
             replayed: self.replayed,
             outcomes,
-            strikes: m.clean_onsets + m.smeared_onsets - lifts_and_dampers,
+            strikes: m.clean_onsets + m.smeared_onsets - lifts_and_dampers - fingers,
             lifts_and_dampers,
+            fingers,
             unmatched,
             folded: folded_by_octaves.values().sum(),
             folded_by_octaves,

@@ -255,6 +255,9 @@ pub struct Report {
     /// Presses of lead outputs (an open hi-hat's lift) and dampers on the virtual robot: no
     /// note's own strike. With `strikes`, every key-down of the virtual robot.
     pub lifts_and_dampers: u64,
+    /// Presses of a wind robot's fingers (its notes sound on its valve, in `strikes`). With
+    /// `strikes` and `lifts_and_dampers`, every key-down of the virtual robot.
+    pub fingers: u64,
     /// Notes that struck but made no sound (must be 0).
     pub unmatched: u64,
     /// Notes folded into the keys, whatever became of them.

@@ -216,4 +216,13 @@ impl Setup {
             .map(|k| self.config.strikes.is_extra(k))
             .collect()
     }
+
+    /// Per key: whether it is a wind robot's finger, not a note's strike (the notes sound on
+    /// its valve).
+    pub(crate) fn finger_keys(&self) -> Vec<bool> {
+        let wind = &self.config.wind;
+        self.keys()
+            .map(|k| wind.owns(k) && k != wind.valve())
+            .collect()
+    }
 }

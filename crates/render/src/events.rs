@@ -184,6 +184,9 @@ pub struct Output {
     pub silent: bool,
     /// The output it damps (a damper: its strike ends that output's ring).
     pub damps: Option<u8>,
+    /// Whether each press sounds the note the account says (a wind robot's valve, on which
+    /// every note of its voice lands), not `note`.
+    pub by_account: bool,
 }
 
 impl Output {
@@ -193,6 +196,16 @@ impl Output {
         Self {
             silent: true,
             ..Self::key(0)
+        }
+    }
+
+    /// A wind robot's valve sounding as `instrument`: each press the note the account says
+    /// (`note` where it says none), held until the valve closes.
+    pub fn voice(instrument: Instrument, note: u8) -> Self {
+        Self {
+            instrument,
+            by_account: true,
+            ..Self::key(note)
         }
     }
 
@@ -212,6 +225,7 @@ impl Output {
             rings: false,
             silent: false,
             damps: None,
+            by_account: false,
         }
     }
 
@@ -223,6 +237,7 @@ impl Output {
             rings: true,
             silent: false,
             damps: None,
+            by_account: false,
         }
     }
 
@@ -234,6 +249,7 @@ impl Output {
             rings: true,
             silent: false,
             damps: None,
+            by_account: false,
         }
     }
 }
@@ -302,6 +318,7 @@ pub fn from_robot(
     let origin = i128::from(start_us) * 1000;
     let mut events = Vec::with_capacity(performance.sounds.len());
     let mut rings = Rings::new(outputs.len());
+    let mut voiced: HashMap<u8, u8> = HashMap::new();
     for s in &performance.sounds {
         let output = outputs.get(usize::from(s.key)).ok_or_else(|| {
             RenderError::Inconsistent(format!("key {} is not one of the robot's", s.key))
@@ -336,13 +353,19 @@ pub fn from_robot(
             }
             continue;
         }
-        let note = match output.instrument {
-            Instrument::Drums => written
-                .get(&(s.key, s.time.as_nanos() / 1000))
-                .copied()
-                .unwrap_or(output.note),
-            Instrument::Program(_) => output.note,
+        let note = if output.instrument == Instrument::Drums || output.by_account {
+            let at = (s.key, s.time.as_nanos() / 1000);
+            match (strike, output.by_account) {
+                // A voice's key-up releases the note its key-down struck.
+                (None, true) => voiced.get(&s.key).copied().unwrap_or(output.note),
+                _ => written.get(&at).copied().unwrap_or(output.note),
+            }
+        } else {
+            output.note
         };
+        if output.by_account && strike.is_some() {
+            voiced.insert(s.key, note);
+        }
         let event = KeyEvent {
             at_ns,
             note: note & 0x7F,

@@ -58,7 +58,10 @@ pub enum OutputRow {
     Bar(u8),
     /// A drum of a kit, on its named lane ([`Rows::lanes`]), drawn as hits.
     Drum(u16),
-    /// An output no note strikes itself (a lift, a damper): not drawn.
+    /// A wind robot's valve, every note of its one voice landing on it: each drawn on the
+    /// row of its written pitch, held.
+    Voice,
+    /// An output no note strikes itself (a lift, a damper, a finger): not drawn.
     None,
 }
 
@@ -128,6 +131,7 @@ impl Rows {
                 hit: true,
             },
             Some(OutputRow::None) => pitch(written, true),
+            Some(OutputRow::Voice) => pitch(written, false),
             None => pitch(self.keys.map_or(0, |k| k.0).saturating_add(key), false),
         }
     }

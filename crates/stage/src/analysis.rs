@@ -151,6 +151,7 @@ fn rows(robot: &Robot) -> orch_roll::build::Rows {
         for (name, notes) in g.outputs.iter().zip(&g.notes) {
             let row = match (g.kind, notes.first()) {
                 (_, None) => OutputRow::None,
+                (orch_robot::GroupKind::Fingered, Some(_)) => OutputRow::Voice,
                 (orch_robot::GroupKind::Kit, _) => {
                     rows.lanes.push(name.clone());
                     OutputRow::Drum(rows.lanes.len() as u16 - 1)

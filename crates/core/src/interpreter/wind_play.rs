@@ -55,7 +55,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         self.wind_state.target = Some((n, of.key, velocity.get(), of.octaves));
         self.wind_state.released = false;
         self.wind_close(now);
-        sink.note(NoteEvent::Waiting { channel, note, at });
+        sink.note(NoteEvent::Preparing { channel, note, at });
     }
 
     /// The note preparing (not sounded yet) loses its place to a new one: dropped, as

@@ -68,6 +68,7 @@ impl<S: Iterator<Item = ScoreEvent> + Clone> Run<'_, S> {
             replayed: u64::from(passes.offset),
             dynamic_keys: self.setup.dynamic_keys(),
             extra_keys: self.setup.extra_keys(),
+            finger_keys: self.setup.finger_keys(),
         })
     }
 }
