@@ -591,6 +591,7 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         for l in &mut self.channel_last {
             *l = l.map(remap);
         }
+        self.wind_remap(&renamed, remap);
     }
 
     /// The wall time of the next send, once it is final; `None` when the song is over.

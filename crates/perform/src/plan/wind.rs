@@ -62,6 +62,26 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         }
     }
 
+    /// After the map changed (a tempo change): the group's Note-Offs follow their sends
+    /// (`renamed`: each send's new time by its sequence number; a send not in it has gone),
+    /// its times follow the map.
+    pub(super) fn wind_remap(
+        &mut self,
+        renamed: &std::collections::HashMap<u64, i64>,
+        remap: impl Fn(i64) -> i64,
+    ) {
+        let follow = |q: QueueKey| renamed.get(&q.1).map(|&t| (t, q.1));
+        self.wind.offs = std::mem::take(&mut self.wind.offs)
+            .into_iter()
+            .filter_map(|(q, end)| Some((follow(q)?, remap(end))))
+            .collect();
+        if let Some((opens, off)) = &mut self.wind.last {
+            *opens = remap(*opens);
+            // A Note-Off already sent keeps its (past) time.
+            *off = off.map(|q| follow(q).unwrap_or(q));
+        }
+    }
+
     /// A Note-Off of the fingered group: at its score time (the valve closes then).
     pub(super) fn wind_off(&mut self, ch: u8, w: i64, bytes: WireBytes) {
         let at = self.after_controller(ch, w);
