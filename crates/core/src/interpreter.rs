@@ -1259,22 +1259,8 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     }
 
     fn note_off(&mut self, channel: Channel, note: Note, now: u32) {
-        #[cfg(feature = "wind")]
-        if let Ok(KeyOf { key, .. }) = self.route(channel, note) {
-            if self.config.is_wind(key) {
-                self.wind_note_off(note, now);
-                return;
-            }
-        }
-        #[cfg(feature = "strike")]
-        if let Ok(KeyOf { key, .. }) = self.route(channel, note) {
-            if self.is_strike(key) {
-                if self.config.strikes.damper(key).is_some() {
-                    self.set_damp_due(key, true);
-                    self.try_damp(key, now);
-                }
-                return;
-            }
+        if self.group_note_off(channel, note, now) {
+            return;
         }
         let pedal = self.config.sustain && self.pedals & channel.bit() != 0;
         let was_on = if pedal {
@@ -1291,6 +1277,37 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 self.release_key(of.key, now);
             }
         }
+    }
+
+    /// A Note-Off that a strike group (its damper) or the fingered group takes: whether it
+    /// took it. The note is routed once.
+    #[cfg(any(feature = "strike", feature = "wind"))]
+    fn group_note_off(&mut self, channel: Channel, note: Note, now: u32) -> bool {
+        let Ok(KeyOf { key, .. }) = self.route(channel, note) else {
+            return false;
+        };
+        #[cfg(feature = "wind")]
+        if self.config.is_wind(key) {
+            self.wind_note_off(note, now);
+            return true;
+        }
+        #[cfg(feature = "strike")]
+        if self.is_strike(key) {
+            if self.config.strikes.damper(key).is_some() {
+                self.set_damp_due(key, true);
+                self.try_damp(key, now);
+            }
+            return true;
+        }
+        let _ = (key, now);
+        false
+    }
+
+    /// Without strike or fingered groups every Note-Off is the keyboard's.
+    #[cfg(not(any(feature = "strike", feature = "wind")))]
+    #[inline(always)]
+    fn group_note_off(&mut self, _channel: Channel, _note: Note, _now: u32) -> bool {
+        false
     }
 
     fn pedal_up(&mut self, channel: Channel, now: u32) {

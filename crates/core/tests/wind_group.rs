@@ -255,3 +255,40 @@ proptest! {
         prop_assert_eq!(whole.robot.stats(), bytes.robot.stats());
     }
 }
+
+#[test]
+fn the_hold_limit_on_a_finger_stops_the_whole_group_valve_and_all() {
+    let mut config = pipe(Voice::Highest);
+    config.guard.max_hold = Some(Duration::from_millis(1_000));
+    let mut rig = Rig::new(config);
+    rig.feed(&[0x90, 72, 100], ms(0));
+    rig.run_until(ms(5_000));
+    // The fingers went down at 0 and the valve at 20 ms; the fingers' hold limit at 1 s cuts
+    // every output in one write, the valve with them.
+    assert_eq!(edges(&rig, VALVE), [(SETTLE, true), (1_000, false)]);
+    assert_eq!(edges(&rig, finger(0)), [(0, true), (1_000, false)]);
+    assert_eq!(rig.last, [0; 4]);
+    assert!(rig.robot.stats().cut_by_hold_limit >= 1);
+}
+
+#[test]
+fn on_a_pwm_board_the_valve_opens_at_the_notes_breath() {
+    let config = Config {
+        dynamics: orch_core::Dynamics::PWM,
+        ..pipe(Voice::Highest)
+    };
+    let valve_duty = |note: u8| {
+        let mut rig = Rig::new(config);
+        rig.feed(&[0x90, note, 127], ms(0));
+        rig.run_until(ms(500));
+        rig.robot.tick(ms(500));
+        rig.robot.key_duty(VALVE).get()
+    };
+    // C5's breath is 2000, E5's 3600 (of 4095): the duty follows, in proportion.
+    let (low, high) = (valve_duty(72), valve_duty(76));
+    assert!(low > 0 && high > low, "{low} {high}");
+    assert!(
+        (f64::from(high) / f64::from(low) - 1.8).abs() < 0.01,
+        "{low} {high}"
+    );
+}
