@@ -29,6 +29,7 @@ pub struct Control {
     pub(crate) tempo: Asked<Tempo>,
     pub(crate) jump: Asked<Jump>,
     map: Mutex<Option<TimeMap>>,
+    start_at: Mutex<Option<WallTime>>,
 }
 
 impl Control {
@@ -122,6 +123,22 @@ impl Control {
     /// the score is at any moment, for a follower that pulls the phase toward a beat.
     pub fn time_map(&self) -> Option<TimeMap> {
         *self.map.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Start at a moment given, not as soon as the robot is ready: the performance's first
+    /// place (score time 0, or the target of a jump asked before it starts, such as
+    /// `--from`) plays at wall time `at` on the performer's clock, its first notes sent
+    /// early by their leads as always. Asked before the performance starts (it is read once,
+    /// there); a moment too soon for the robot's setup and the planner's lookahead is taken
+    /// as soon as possible ([`TimeMap::wall_at`] says when). A session shared with other
+    /// hosts (Ableton Link) starts every robot on one bar line this way.
+    pub fn start_at(&self, at: WallTime) {
+        *self.start_at.lock().unwrap_or_else(|e| e.into_inner()) = Some(at);
+    }
+
+    /// The start asked with [`start_at`](Self::start_at), if any.
+    pub(crate) fn asked_start(&self) -> Option<WallTime> {
+        *self.start_at.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     pub(crate) fn publish(&self, map: TimeMap) {

@@ -361,6 +361,13 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         }
     }
 
+    /// Starts at wall time `start_us` instead of the one [`new`](Self::new) was given (before
+    /// anything is planned): score time 0 plays the lookahead after it.
+    pub fn starting(mut self, start_us: i64) -> Self {
+        self.map = TimeMap::new(start_us + self.lookahead, self.map.tempo());
+        self
+    }
+
     /// Plans the whole song before the first send leaves: the reference the streaming planner
     /// must equal at a constant tempo.
     pub fn eager(mut self) -> Self {

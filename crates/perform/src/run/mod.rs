@@ -118,10 +118,19 @@ impl<'a, S: Iterator<Item = ScoreEvent> + Clone> Run<'a, S> {
         let origin = p.control.map(|_| p.source.clone());
         let boards = sim_boards(&setup.sim).map_err(robot_err)?;
         let robot = LocalRobot::<SimBoards>::new(setup.config, boards).map_err(robot_err)?;
-        // Start once the boards are configured, on a whole millisecond.
+        // Start once the boards are configured, on a whole millisecond; or later, so that
+        // the first place plays at the moment the control asks.
         let ready = robot.boards().bus().bus().free_at().as_micros();
         let ready = WallTime::from_micros(ready.div_ceil(1000) * 1000);
-        let planner = Planner::new(p.source, setup.rules(), ready.signed(), setup.tempo);
+        let mut planner = Planner::new(p.source, setup.rules(), ready.signed(), setup.tempo);
+        let asked = p.control.and_then(Control::asked_start);
+        let ready = match asked.map(|at| at.signed() - planner.lookahead_us()) {
+            Some(later) if later > ready.signed() => {
+                planner = planner.starting(later);
+                WallTime::from_signed(later)
+            }
+            _ => ready,
+        };
         let start = planner.time_map().wall_at(ScoreTime::ZERO);
         if let Some(c) = p.control {
             c.publish(*planner.time_map());
