@@ -182,6 +182,15 @@ pub struct PlayArgs {
     /// in turn, with its "out".
     #[arg(long, value_name = "FILE")]
     pub notes: Option<PathBuf>,
+    /// Join the Ableton Link session on the network (built with the `link` feature): wait for
+    /// it to play, come in on its bar line (a bar of the file's first time signature), and
+    /// follow its tempo (a score quarter note is one session beat) until the file ends or the
+    /// session stops.
+    #[arg(long, conflicts_with_all = ["fast", "from"])]
+    pub link: bool,
+    /// With --link: start the session if nobody has within a second.
+    #[arg(long, requires = "link")]
+    pub start: bool,
 }
 
 #[derive(Args, Debug)]

@@ -49,6 +49,7 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
             view: !args.no_view,
             file: &args.file,
             conductor: Some(&conducting),
+            steered: None,
         },
     )?;
     if !args.json {

@@ -21,6 +21,7 @@ pub mod decode;
 pub mod error;
 pub mod input;
 pub mod interpret;
+pub mod link;
 pub mod live;
 pub mod play;
 pub mod render;

@@ -32,6 +32,8 @@ pub(crate) struct LiveOptions<'a> {
     /// view shows its line under its head, and gives it the keys pressed (other than the jump
     /// keys, q and Esc: taps, for a tap source).
     pub conductor: Option<&'a Conducting>,
+    /// A control steered from elsewhere (an Ableton Link session), and its clock's zero.
+    pub steered: Option<(Arc<Control>, std::time::Instant)>,
 }
 
 /// Logging through `tracing` on standard error: warnings (a device or a board lost, and back),
@@ -63,6 +65,7 @@ pub(crate) fn play_live(
         view: show,
         file,
         conductor,
+        steered,
     } = options;
     // SIGINT, SIGTERM and SIGHUP stop the way `q` does.
     let signalled = orch_stage::signals::stop_flag()?;
@@ -70,9 +73,10 @@ pub(crate) fn play_live(
     let title = file
         .file_name()
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-    let (control, origin) = match &conductor {
-        Some(c) => (Arc::clone(&c.control), c.origin),
-        None => (Control::new(), std::time::Instant::now()),
+    let (control, origin) = match (&conductor, steered) {
+        (Some(c), _) => (Arc::clone(&c.control), c.origin),
+        (None, Some(steered)) => steered,
+        (None, None) => (Control::new(), std::time::Instant::now()),
     };
     let mut view = None;
     // The bar being typed, and the bar playing (for `[` and `]`).

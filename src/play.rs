@@ -6,6 +6,7 @@
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use anyhow::Context;
 use orch_io::{OutSpec, Target};
@@ -29,6 +30,23 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
     let from_us = from_bar(&song, args.from)?;
     let robot = load_robot(args.robot.as_deref())?;
     let mut setup = orch_stage::setup::setup(&robot, !args.no_compensation, tempo(args.tempo)?);
+    if args.link && args.tempo != 1.0 {
+        return Err(bad_input(
+            "--tempo: with --link the session sets the pace; leave out --tempo",
+        ));
+    }
+    // With --link: joined, and the session playing, before anything opens; the tempo is the
+    // session's.
+    let joined = if args.link {
+        let give_up = orch_stage::signals::stop_flag()?;
+        let Some(joined) = crate::link::join(&song, &setup, args.start, &give_up)? else {
+            return Ok(());
+        };
+        setup.tempo = joined.tempo;
+        Some(joined)
+    } else {
+        None
+    };
     if args.writes.is_some() {
         // Every write is kept for the file, not only the presses the report needs.
         setup.sim.keep = orch_sim::Keep::Everything;
@@ -55,10 +73,11 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
             command: "orch play",
             view: !args.no_view,
             file: &args.file,
-            from_us,
+            from_us: joined.as_ref().map_or(from_us, |j| j.from_us),
             conductor: None,
+            steered: joined.as_ref().map(|j| (Arc::clone(&j.control), j.origin)),
         };
-        play_live(song, lanes, live)?
+        play_linked(song, lanes, live, joined.as_ref())?
     };
     if let (Some(mut file), Some(path)) = (writes, &args.writes) {
         orch_stage::account::write_board_writes(&mut file, &played)
@@ -70,6 +89,24 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
     }
     // The comparison without compensation is `orch analyze`'s: a play renders once.
     print_reports(&played, args.json, &args.file, !args.outs.is_empty())
+}
+
+/// [`play_live`], kept on the Link session's beat with `--link`.
+fn play_linked(
+    song: Song,
+    lanes: Vec<Lane>,
+    live: LiveOptions<'_>,
+    joined: Option<&crate::link::Joined>,
+) -> anyhow::Result<Vec<Ended>> {
+    #[cfg(feature = "link")]
+    if let Some(j) = joined {
+        let following = j.follow();
+        let played = play_live(song, lanes, live);
+        following.end();
+        return played;
+    }
+    let _ = joined;
+    play_live(song, lanes, live)
 }
 
 /// Creates the file an option names, if it names one.
