@@ -73,7 +73,7 @@ mod imp {
             return Ok(None);
         }
         let lookahead =
-            Planner::new(std::iter::empty(), setup.rules(), 0, Tempo::NORMAL).lookahead_us();
+            Planner::new(std::iter::empty(), setup.rules(), 0, Tempo::NORMAL).jump_lead_us();
         let timeline = session.capture();
         let origin = Instant::now();
         let (host, wall) = session.now_pair(origin);

@@ -381,6 +381,12 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         self.lookahead
     }
 
+    /// How long after a jump its target plays, wall µs: the lookahead, at least the re-strike
+    /// gap (so that the first notes after the target strike on time, with every key up).
+    pub fn jump_lead_us(&self) -> i64 {
+        self.lookahead.max(self.rules.restrike_gap_us as i64)
+    }
+
     /// The score ↔ wall time map.
     pub fn time_map(&self) -> &TimeMap {
         &self.map
@@ -528,8 +534,7 @@ impl<S: Iterator<Item = ScoreEvent>> Planner<S> {
         for (_, bytes) in chased {
             self.send(now_us, bytes, None, now_us);
         }
-        let lead_in = self.lookahead.max(self.rules.restrike_gap_us as i64);
-        self.map.jump(now_us + lead_in, target_us);
+        self.map.jump(now_us + self.jump_lead_us(), target_us);
         jumped
     }
 

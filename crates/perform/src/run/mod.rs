@@ -124,7 +124,12 @@ impl<'a, S: Iterator<Item = ScoreEvent> + Clone> Run<'a, S> {
         let ready = WallTime::from_micros(ready.div_ceil(1000) * 1000);
         let mut planner = Planner::new(p.source, setup.rules(), ready.signed(), setup.tempo);
         let asked = p.control.and_then(Control::asked_start);
-        let ready = match asked.map(|at| at.signed() - planner.lookahead_us()) {
+        // A jump asked before the start (`--from`) is its first place.
+        let lead = match p.control.is_some_and(|c| c.jump.pending(0).is_some()) {
+            true => planner.jump_lead_us(),
+            false => planner.lookahead_us(),
+        };
+        let ready = match asked.map(|at| at.signed() - lead) {
             Some(later) if later > ready.signed() => {
                 planner = planner.starting(later);
                 WallTime::from_signed(later)

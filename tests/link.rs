@@ -1,0 +1,414 @@
+//! Robots on several hosts in phase: `orch play --link` peers, each in a network namespace of
+//! its own on one bridge (made here: CI runs as root), and an independent Link peer that is
+//! not orch (`tests/link/peer.py`: Ableton's own SDK through LinkPython-extern, PyPI) which
+//! sets the tempo, starts and stops the session, and collects every robot's MIDI (`--out
+//! udp:`) stamped with its own view of the session's beat.
+//!
+//! One piece, as a rehearsal goes: three robots wait; the independent peer starts the
+//! session; they come in together on bar one; it changes the tempo; a fourth robot joins
+//! mid-piece and comes in on the beat, at the score's place there; it stops the session, and
+//! every robot stops with every key up. The robots send at the score's time
+//! (`--no-compensation`), so the moment a message arrives is the moment its note sounds on a
+//! robot that strikes at once.
+
+#![cfg(feature = "link")]
+
+mod support;
+
+use std::io::{BufRead, BufReader, Write};
+use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+const ORCH: &str = env!("CARGO_BIN_EXE_orch");
+const PEER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/link/peer.py");
+
+/// The most a note may arrive off its beat, ms.
+const ON_BEAT_MS: f64 = 3.0;
+
+fn ip(args: &[&str]) {
+    let out = Command::new("ip")
+        .args(args)
+        .output()
+        .expect("ip (iproute2)");
+    assert!(
+        out.status.success(),
+        "ip {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// A bridge and `hosts` namespaces on it, 10.77.0.10 + i/24; taken down when dropped.
+struct Net {
+    bridge: String,
+    hosts: Vec<String>,
+}
+
+impl Net {
+    fn new(hosts: usize) -> Net {
+        assert!(
+            nix_is_root(),
+            "tests/link.rs makes network namespaces: run as root (CI does)"
+        );
+        let tag = std::process::id() % 100_000;
+        let bridge = format!("orchbr{tag}");
+        let net = Net {
+            bridge: bridge.clone(),
+            hosts: (0..hosts).map(|i| format!("orchl{tag}-{i}")).collect(),
+        };
+        ip(&[
+            "link",
+            "add",
+            &bridge,
+            "type",
+            "bridge",
+            "mcast_snooping",
+            "0",
+        ]);
+        ip(&["link", "set", &bridge, "up"]);
+        for (i, ns) in net.hosts.iter().enumerate() {
+            let veth = format!("ol{tag}v{i}");
+            ip(&["netns", "add", ns]);
+            ip(&[
+                "link", "add", &veth, "type", "veth", "peer", "name", "eth0", "netns", ns,
+            ]);
+            ip(&["link", "set", &veth, "master", &bridge, "up"]);
+            let addr = format!("{}/24", Net::addr(i));
+            ip(&["-n", ns, "addr", "add", &addr, "dev", "eth0"]);
+            ip(&["-n", ns, "link", "set", "eth0", "up"]);
+            ip(&["-n", ns, "link", "set", "lo", "up"]);
+            ip(&["-n", ns, "route", "add", "224.0.0.0/4", "dev", "eth0"]);
+        }
+        net
+    }
+
+    fn addr(i: usize) -> String {
+        format!("10.77.0.{}", 10 + i)
+    }
+
+    /// `program` with `args` in host `i`'s namespace.
+    fn command(&self, i: usize, program: &str, args: &[&str]) -> Command {
+        let mut c = Command::new("ip");
+        c.args(["netns", "exec", &self.hosts[i], program])
+            .args(args);
+        c
+    }
+}
+
+impl Drop for Net {
+    fn drop(&mut self) {
+        for ns in &self.hosts {
+            let _ = Command::new("ip").args(["netns", "del", ns]).status();
+        }
+        let _ = Command::new("ip")
+            .args(["link", "del", &self.bridge])
+            .status();
+    }
+}
+
+fn nix_is_root() -> bool {
+    std::fs::read_to_string("/proc/self/status").is_ok_and(|s| {
+        s.lines()
+            .any(|l| l.starts_with("Uid:") && l.split_whitespace().nth(1) == Some("0"))
+    })
+}
+
+/// The independent peer, talked to a line at a time.
+struct Peer {
+    child: Child,
+    stdin: ChildStdin,
+    stdout: BufReader<ChildStdout>,
+}
+
+impl Peer {
+    fn start(net: &Net, host: usize, ports: usize) -> Peer {
+        let addr = Net::addr(host);
+        let ports = ports.to_string();
+        let mut child = net
+            .command(host, "python3", &[PEER, &addr, "9001", &ports])
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .spawn()
+            .expect("python3");
+        let stdin = child.stdin.take().unwrap();
+        let stdout = BufReader::new(child.stdout.take().unwrap());
+        let mut peer = Peer {
+            child,
+            stdin,
+            stdout,
+        };
+        assert_eq!(peer.line(), "ready");
+        peer
+    }
+
+    fn line(&mut self) -> String {
+        let mut l = String::new();
+        self.stdout.read_line(&mut l).unwrap();
+        l.trim().to_string()
+    }
+
+    /// Sends a command; its answer's words after `ok`.
+    fn ask(&mut self, command: &str) -> Vec<f64> {
+        writeln!(self.stdin, "{command}").unwrap();
+        let answer = self.line();
+        let words: Vec<&str> = answer.split_whitespace().collect();
+        assert_eq!(words.first(), Some(&"ok"), "{command}: {answer}");
+        words[1..].iter().map(|w| w.parse().unwrap()).collect()
+    }
+
+    fn report(&mut self) -> Vec<Value> {
+        writeln!(self.stdin, "report").unwrap();
+        serde_json::from_str::<Value>(&self.line())
+            .unwrap()
+            .as_array()
+            .unwrap()
+            .clone()
+    }
+
+    fn wait_peers(&mut self, n: usize) {
+        let until = Instant::now() + Duration::from_secs(15);
+        while self.ask("peers")[0] < n as f64 {
+            assert!(
+                Instant::now() < until,
+                "the Link peers did not find each other"
+            );
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    }
+}
+
+impl Drop for Peer {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// An `orch play --link` robot in host `host`, sending to the collector's port `port`.
+fn robot(net: &Net, host: usize, file: &str, port: u16) -> Child {
+    let out = format!("udp:{}:{port}", Net::addr(0));
+    net.command(
+        host,
+        ORCH,
+        &[
+            "play",
+            file,
+            "--link",
+            "--no-view",
+            "--no-compensation",
+            "--json",
+            "--out",
+            &out,
+        ],
+    )
+    .stdout(Stdio::piped())
+    .stderr(Stdio::piped())
+    .spawn()
+    .expect("orch")
+}
+
+/// A Note-On as the collector stamped it.
+#[derive(Clone, Copy, Debug)]
+struct Onset {
+    /// The robot, from 0 (the fourth, 3, joins mid-piece).
+    robot: usize,
+    note: u8,
+    host_us: f64,
+    beat: f64,
+    bpm: f64,
+}
+
+impl Onset {
+    /// How far off its beat it arrived, ms (positive: late).
+    fn off_ms(&self) -> f64 {
+        (self.beat - self.beat.round()) * 60e3 / self.bpm
+    }
+}
+
+fn onsets(report: &[Value]) -> Vec<Onset> {
+    report
+        .iter()
+        .filter_map(|m| {
+            let b: Vec<u64> = m["bytes"]
+                .as_array()?
+                .iter()
+                .filter_map(Value::as_u64)
+                .collect();
+            (b.len() == 3 && b[0] & 0xF0 == 0x90 && b[2] > 0).then(|| Onset {
+                robot: m["peer"].as_u64().unwrap() as usize,
+                note: b[1] as u8,
+                host_us: m["host_us"].as_f64().unwrap(),
+                beat: m["beat"].as_f64().unwrap(),
+                bpm: m["bpm"].as_f64().unwrap(),
+            })
+        })
+        .collect()
+}
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    sorted[((p * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len()) - 1]
+}
+
+#[test]
+fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
+    let net = Net::new(5);
+    let file = std::env::temp_dir().join(format!("orch-link-{}.mid", std::process::id()));
+    // 400 quarter notes at 120 BPM, notes 48..71 in turn: a note tells its quarter.
+    std::fs::write(&file, support::quarters_smf(400, 120.0)).unwrap();
+    let file = file.to_str().unwrap();
+    let mut peer = Peer::start(&net, 0, 4);
+    // Its session is older than the robots' by more than Link's 0.5 s: theirs join it (two
+    // sessions met within 0.5 s go by their ids).
+    std::thread::sleep(Duration::from_millis(1_500));
+    let mut robots: Vec<Child> = (1..=3)
+        .map(|i| robot(&net, i, file, 9000 + i as u16))
+        .collect();
+    peer.wait_peers(3);
+    let started = peer.ask("start");
+    std::thread::sleep(Duration::from_secs(6));
+    let changed = peer.ask("tempo 130");
+    std::thread::sleep(Duration::from_secs(3));
+    let joined_at = Instant::now();
+    robots.push(robot(&net, 4, file, 9004));
+    std::thread::sleep(Duration::from_secs(6));
+    let stopped = peer.ask("stop");
+    let stop_us = stopped[0];
+    let mut ended = Vec::new();
+    for (i, r) in robots.into_iter().enumerate() {
+        let out = r.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "robot {}: {err}", i + 1);
+        assert!(
+            err.contains("the session stopped"),
+            "robot {}: {err}",
+            i + 1
+        );
+        ended.push(serde_json::from_slice::<Value>(&out.stdout).unwrap());
+    }
+    let report = peer.report();
+    let all = onsets(&report);
+    let by = |r: usize| {
+        all.iter()
+            .filter(|o| o.robot == r)
+            .copied()
+            .collect::<Vec<_>>()
+    };
+
+    if let Ok(path) = std::env::var("ORCH_LINK_DUMP") {
+        std::fs::write(path, serde_json::to_string(&report).unwrap()).unwrap();
+    }
+    // Every note of every robot on its beat.
+    let mut offs: Vec<f64> = all.iter().map(|o| o.off_ms().abs()).collect();
+    offs.sort_by(f64::total_cmp);
+    assert!(offs.len() > 4 * 20, "{} notes", offs.len());
+    let worst = offs[offs.len() - 1];
+    assert!(worst < ON_BEAT_MS, "a note {worst:.2} ms off its beat");
+
+    // Bar one: the first bar line at least 300 ms after the start, the same for the three.
+    let (start_us, start_beat) = (started[0], started[1]);
+    let bar_one = ((start_beat + 0.3 * 100.0 / 60.0) / 4.0).ceil() * 4.0;
+    for r in 0..3 {
+        let first = by(r)[0];
+        assert_eq!(first.beat.round(), bar_one, "{first:?}");
+        assert_eq!(first.note, 48, "{first:?}: not the top");
+        assert!(first.host_us > start_us);
+    }
+
+    // At every beat, every robot that plays it plays the same quarter of the score.
+    let quarter_of = |o: &Onset| (o.beat.round() - bar_one) as i64;
+    for o in &all {
+        assert_eq!(
+            i64::from(o.note) - 48,
+            quarter_of(o).rem_euclid(24),
+            "robot {} at beat {:.3}",
+            o.robot,
+            o.beat
+        );
+    }
+
+    // The tempo change is followed within one beat: after it, each robot's notes come a
+    // 130 BPM beat apart (and on the beat, above).
+    let beat_after = changed[0] + 60e6 / 130.0;
+    for r in 0..3 {
+        let after: Vec<Onset> = by(r)
+            .into_iter()
+            .filter(|o| o.host_us > beat_after)
+            .collect();
+        assert!(after.len() > 10);
+        for w in after.windows(2) {
+            let gap_ms = (w[1].host_us - w[0].host_us) / 1e3;
+            assert!(
+                (gap_ms - 60e3 / 130.0).abs() < ON_BEAT_MS,
+                "{:?}: {gap_ms:.2} ms",
+                w[1]
+            );
+        }
+    }
+
+    // The robot that joined mid-piece came in on a beat, at the score's place there, soon.
+    let late = by(3);
+    assert!(!late.is_empty(), "the fourth robot never came in");
+    assert!(quarter_of(&late[0]) > 8, "{:?}", late[0]);
+    let waited = late[0].host_us - (stop_us - joined_at.elapsed().as_micros() as f64);
+    assert!(
+        waited < 3e6,
+        "it came in {:.0} ms after it was started",
+        waited / 1e3
+    );
+    let skipped = ended[3]["outcomes"]["skipped"].as_u64().unwrap();
+    assert!(skipped as i64 >= quarter_of(&late[0]), "{skipped}");
+
+    // Joining changed nobody's tempo.
+    assert_eq!(peer.ask("tempo 130")[2], 130.0);
+
+    // The stop: every robot's last message is an All Notes Off or All Sound Off, soon after.
+    for r in 0..4 {
+        let last = report.iter().filter(|m| m["peer"] == r).last().unwrap();
+        let b: Vec<u64> = last["bytes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(Value::as_u64)
+            .collect();
+        assert!(
+            b[0] & 0xF0 == 0xB0 && (b[1] == 123 || b[1] == 120),
+            "robot {}: {b:?}",
+            r + 1
+        );
+        let after_ms = (last["host_us"].as_f64().unwrap() - stop_us) / 1e3;
+        assert!(
+            after_ms < 500.0,
+            "robot {} stopped {after_ms:.0} ms after",
+            r + 1
+        );
+    }
+
+    // The figure: the spread of each beat's onsets across the robots that played it.
+    let mut spreads = Vec::new();
+    let mut beats: Vec<i64> = all.iter().map(|o| o.beat.round() as i64).collect();
+    beats.dedup();
+    for b in beats {
+        let at: Vec<f64> = all
+            .iter()
+            .filter(|o| o.beat.round() as i64 == b)
+            .map(|o| o.host_us)
+            .collect();
+        if at.len() >= 3 {
+            let (lo, hi) = at
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(l, h), &t| (l.min(t), h.max(t)));
+            spreads.push((hi - lo) / 1e3);
+        }
+    }
+    spreads.sort_by(f64::total_cmp);
+    eprintln!(
+        "onset spread across robots: median {:.3}, p99 {:.3}, max {:.3} ms over {} beats; off the beat max {worst:.3} ms",
+        percentile(&spreads, 0.5),
+        percentile(&spreads, 0.99),
+        spreads[spreads.len() - 1],
+        spreads.len()
+    );
+    let _ = std::fs::remove_file(file);
+}
