@@ -59,41 +59,108 @@ pub(crate) fn play_live(
     lanes: Vec<Lane>,
     options: LiveOptions<'_>,
 ) -> anyhow::Result<Vec<Ended>> {
-    let LiveOptions {
-        command,
-        from_us,
-        view: show,
-        file,
-        conductor,
-        steered,
-    } = options;
-    // SIGINT, SIGTERM and SIGHUP stop the way `q` does.
-    let signalled = orch_stage::signals::stop_flag()?;
-    let show = show && std::io::stdout().is_terminal();
-    let title = file
-        .file_name()
-        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-    let (control, origin) = match (&conductor, steered) {
+    let from_us = options.from_us;
+    let (control, origin) = match (&options.conductor, options.steered.clone()) {
         (Some(c), _) => (Arc::clone(&c.control), c.origin),
         (None, Some(steered)) => steered,
         (None, None) => (Control::new(), std::time::Instant::now()),
     };
-    let mut view = None;
-    // The bar being typed, and the bar playing (for `[` and `]`).
-    let mut typed = bars::Typed::default();
-    let mut bar_now = 1;
-    let watch = |session: &Session| -> anyhow::Result<()> {
+    let mut terminal = Terminal::new(options);
+    let watched = watch::play(song, lanes, control, origin, from_us, |s| terminal.watch(s));
+    // The terminal is given back before anything is said.
+    drop(terminal);
+    ended(watched.priority_refused, watched.result)
+}
+
+/// Says (on standard error) that real-time priority was refused, if it was, and gives every
+/// robot's end, or the error of a performance that failed in the binary's words (a panic goes
+/// on).
+pub(crate) fn ended(
+    priority_refused: bool,
+    result: Result<Vec<Ended>, WatchError<anyhow::Error>>,
+) -> anyhow::Result<Vec<Ended>> {
+    note_priority(priority_refused);
+    result.map_err(failed)
+}
+
+/// Says (on standard error) that real-time priority was refused, if it was.
+pub(crate) fn note_priority(refused: bool) {
+    if refused {
+        eprintln!(
+            "orch: note: the OS refused real-time priority to the sender; under load its \
+             messages may be late (see lateness in the report)"
+        );
+    }
+}
+
+/// A live performance's failure in the binary's words (a panic goes on).
+pub(crate) fn failed(e: WatchError<anyhow::Error>) -> anyhow::Error {
+    match e {
+        WatchError::Panicked(panic) => std::panic::resume_unwind(panic),
+        WatchError::Front(e) => e,
+        WatchError::Failed(spec, SessionFailure::Performance(e)) => {
+            anyhow::Error::new(e).context(format!("--out {}", spec.text))
+        }
+        WatchError::Failed(spec, SessionFailure::Panicked) => anyhow::anyhow!(
+            "the sender thread of --out {} panicked (its keys were released)",
+            spec.text
+        ),
+    }
+}
+
+/// The terminal watching a live performance: the view (if shown), the keys, the signals
+/// that stop it. Dropping it gives the terminal back.
+pub(crate) struct Terminal<'a> {
+    command: &'static str,
+    show: bool,
+    title: String,
+    conductor: Option<&'a Conducting>,
+    /// SIGINT, SIGTERM and SIGHUP, once the performance has begun.
+    signalled: Option<Arc<std::sync::atomic::AtomicBool>>,
+    view: Option<View>,
+    /// The bar being typed.
+    typed: bars::Typed,
+    /// The bar playing (for `[` and `]`).
+    bar_now: u32,
+}
+
+impl<'a> Terminal<'a> {
+    pub(crate) fn new(options: LiveOptions<'a>) -> Self {
+        let title = options
+            .file
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        Self {
+            command: options.command,
+            show: options.view && std::io::stdout().is_terminal(),
+            title,
+            conductor: options.conductor,
+            signalled: None,
+            view: None,
+            typed: bars::Typed::default(),
+            bar_now: 1,
+        }
+    }
+
+    /// Looks once: stops every robot on a signal or `q`, takes the keys, draws the view.
+    pub(crate) fn watch(&mut self, session: &Session) -> anyhow::Result<()> {
         let control = session.control();
+        // SIGINT, SIGTERM and SIGHUP stop the way `q` does.
+        let signalled = match &self.signalled {
+            Some(s) => s,
+            None => self.signalled.insert(orch_stage::signals::stop_flag()?),
+        };
         if signalled.load(Ordering::SeqCst) {
             control.stop();
         }
-        if !show {
+        if !self.show {
             std::thread::sleep(Duration::from_millis(20));
             return Ok(());
         }
-        if view.is_none() {
-            view = Some(View::start()?);
+        if self.view.is_none() {
+            self.view = Some(View::start()?);
         }
+        let (typed, bar_now, conductor) = (&mut self.typed, self.bar_now, self.conductor);
         // The jump keys: digits and Enter go to the bar typed (Backspace takes a digit back),
         // `[` to the bar before the one playing, `]` to the next.
         let mut on_key = |key: Key| {
@@ -128,34 +195,14 @@ pub(crate) fn play_live(
         let Some(snapshot) = session.snapshot() else {
             return Ok(());
         };
-        bar_now = snapshot.bar;
+        self.bar_now = snapshot.bar;
         let scene = Scene {
-            command,
-            title: title.clone(),
+            command: self.command,
+            title: self.title.clone(),
             now: snapshot,
-            conductor: conductor.map(Conducting::line),
-            prompt: typed.shown().map(str::to_string),
+            conductor: self.conductor.map(Conducting::line),
+            prompt: self.typed.shown().map(str::to_string),
         };
-        Ok(view.as_mut().expect("started").draw(&scene)?)
-    };
-    let watched = watch::play(song, lanes, control, origin, from_us, watch);
-    // The terminal is given back before anything is said.
-    drop(view);
-    if watched.priority_refused {
-        eprintln!(
-            "orch: note: the OS refused real-time priority to the sender; under load its \
-             messages may be late (see lateness in the report)"
-        );
+        Ok(self.view.as_mut().expect("started").draw(&scene)?)
     }
-    watched.result.map_err(|e| match e {
-        WatchError::Panicked(panic) => std::panic::resume_unwind(panic),
-        WatchError::Front(e) => e,
-        WatchError::Failed(spec, SessionFailure::Performance(e)) => {
-            anyhow::Error::new(e).context(format!("--out {}", spec.text))
-        }
-        WatchError::Failed(spec, SessionFailure::Panicked) => anyhow::anyhow!(
-            "the sender thread of --out {} panicked (its keys were released)",
-            spec.text
-        ),
-    })
 }

@@ -12,12 +12,13 @@ use anyhow::Context;
 use orch_io::{OutSpec, Target};
 use orch_perform::{Setup, Tempo};
 use orch_seq::Song;
+use orch_stage::play::{Leaves, Play, PlayError};
 use orch_stage::session::{Ended, Lane};
 use orch_stage::{load_robot, load_song, text, Reports};
 
 use crate::cli::PlayArgs;
 use crate::error::bad_input;
-use crate::live::{init_logging, play_live, LiveOptions};
+use crate::live::{failed, init_logging, note_priority, play_live, LiveOptions, Terminal};
 
 /// `--tempo`: the factor, if a session takes it.
 pub(crate) fn tempo(factor: f64) -> anyhow::Result<Tempo> {
@@ -26,6 +27,43 @@ pub(crate) fn tempo(factor: f64) -> anyhow::Result<Tempo> {
 
 pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
     init_logging(args.verbose);
+    if args.link {
+        return run_linked(args);
+    }
+    let play = Play::file(&args.file)
+        .robot(args.robot.as_deref())
+        .outs(&args.outs)
+        .tempo(args.tempo)
+        .from_bar(args.from)
+        .compensation(!args.no_compensation)
+        .fast(args.fast)
+        .writes_to(args.writes.as_deref())
+        .notes_to(args.notes.as_deref());
+    // On the virtual clock (`--fast`) nobody watches: the terminal stays as it is.
+    let mut terminal = Terminal::new(LiveOptions {
+        command: "orch play",
+        view: !args.no_view,
+        file: &args.file,
+        from_us: None,
+        conductor: None,
+        steered: None,
+    });
+    let performed = play.watch(|s| terminal.watch(s)).run();
+    // The terminal is given back before anything is said.
+    drop(terminal);
+    if let Ok(p) = &performed {
+        note_priority(p.priority_refused);
+    }
+    let performed = performed.map_err(said)?;
+    // The comparison without compensation is `orch analyze`'s: a play renders once.
+    print_reports(&performed.ended, args.json, &args.file, performed.named)
+}
+
+/// `orch play --link`: the song steered by an Ableton Link session, which must be joined
+/// (after the song, the robot and the tempo are read, before the files and the outputs are
+/// opened) and followed while the song plays; step by step here until the session builder
+/// takes a Link clock (see `orch_stage::play::Play::steered_by` and `Play::clock`).
+fn run_linked(args: &PlayArgs) -> anyhow::Result<()> {
     let song = load_song(&args.file)?;
     let from_us = from_bar(&song, args.from)?;
     let robot = load_robot(args.robot.as_deref())?;
@@ -107,6 +145,49 @@ fn play_linked(
     }
     let _ = joined;
     play_live(song, lanes, live)
+}
+
+/// A play's error as `orch play` says it: with the option at fault, bad input (exit 2) where
+/// the user's input is; the note on real-time priority said first for a live one.
+fn said(e: PlayError<anyhow::Error>) -> anyhow::Error {
+    let option = |leaves| match leaves {
+        Leaves::Notes => "--notes",
+        Leaves::Writes => "--writes",
+    };
+    match e {
+        PlayError::Song(e) | PlayError::Fast(e) => anyhow::Error::new(e),
+        PlayError::From { bar, error } => {
+            anyhow::Error::new(error).context(format!("--from {bar}"))
+        }
+        PlayError::Robot(e) => anyhow::Error::new(e),
+        PlayError::Tempo { factor, error } => {
+            anyhow::Error::new(error).context(format!("--tempo {factor}"))
+        }
+        PlayError::File {
+            leaves,
+            path,
+            source,
+            created: true,
+        } => bad_input(format!("{} {}: {source}", option(leaves), path.display())),
+        PlayError::File {
+            leaves,
+            path,
+            source,
+            ..
+        } => anyhow::Error::new(source).context(format!("{} {}", option(leaves), path.display())),
+        PlayError::Out(e) => crate::error::live(e),
+        PlayError::FastOut(out) => bad_input(format!(
+            "--fast renders on the virtual clock, as fast as the machine goes: it cannot play \
+             --out {out}; leave out --fast"
+        )),
+        PlayError::Live {
+            priority_refused,
+            error,
+        } => {
+            note_priority(priority_refused);
+            failed(error)
+        }
+    }
 }
 
 /// Creates the file an option names, if it names one.

@@ -83,6 +83,7 @@ pub mod interpret;
 pub mod live;
 pub mod load;
 pub mod messages;
+pub mod play;
 pub mod report;
 pub mod run;
 pub mod session;

@@ -15,9 +15,21 @@ use orch_perform::{
     realtime, song_events, Control, Cue, Follow, Follower, Link, Live, PerformError, Performer,
     Played, ScoreBeats, ScoreEvent, Setup, TapTempo, Tempo, Timed,
 };
-use orch_seq::Song;
+use orch_seq::{Clock, Song};
 
 use crate::{LiveError, StageError};
+
+/// Makes each robot's clock (one a sender thread, called on the session's thread at its
+/// start): every clock it makes must count from the same zero, the session's origin, so the
+/// robots play in step. [`Session::start`] gives each robot the host's precise clock
+/// ([`realtime::PreciseClock`]) from the origin; a front end plugs in another (a shared
+/// network clock, say) with [`Session::start_clocked`].
+pub type MakeClock = Arc<dyn Fn() -> Box<dyn Clock + Send> + Send + Sync>;
+
+/// [`MakeClock`] for the host's precise clock whose zero is `origin`.
+pub fn precise_clocks(origin: Instant) -> MakeClock {
+    Arc::new(move || Box::new(realtime::PreciseClock::starting_at(origin)))
+}
 
 /// One robot of a session: where it plays and how it is set up.
 pub struct Lane {
@@ -260,6 +272,18 @@ impl Session {
     /// (a conductor's cues are timed on it). A jump asked of `control` before the start
     /// (`--from`) is taken before the first note.
     pub fn start(song: Song, lanes: Vec<Lane>, control: Arc<Control>, origin: Instant) -> Self {
+        Self::start_clocked(song, lanes, control, origin, precise_clocks(origin))
+    }
+
+    /// Starts `song` as [`start`](Self::start) does, each robot paced by a clock `clocks`
+    /// makes (counting from `origin`, as the taps are timed).
+    pub fn start_clocked(
+        song: Song,
+        lanes: Vec<Lane>,
+        control: Arc<Control>,
+        origin: Instant,
+        clocks: MakeClock,
+    ) -> Self {
         let song = Arc::new(song);
         let taps = Mutex::new(Taps {
             tap: TapTempo::new(),
@@ -281,14 +305,14 @@ impl Session {
             notes_total += notes as u64;
             let live: Arc<Mutex<Option<Live>>> = Arc::new(Mutex::new(None));
             let (control, live_in) = (Arc::clone(&control), Arc::clone(&live));
+            let mut clock = clocks();
             let thread = realtime::spawn(move || -> LaneResult {
                 let _guard = StopOnPanic(Arc::clone(&control));
-                let mut clock = realtime::PreciseClock::starting_at(origin);
                 let mut on_live = |l: &Live| {
                     *live_in.lock().unwrap_or_else(|e| e.into_inner()) = Some(l.clone());
                 };
                 let mut performer = Performer::new(&setup, events.into_iter(), notes)
-                    .clock(&mut clock)
+                    .clock(&mut *clock)
                     .control(&control)
                     .live(&mut on_live);
                 if let Some(out) = out.as_mut() {

@@ -43,7 +43,7 @@ pub fn play<E>(
     control: Arc<Control>,
     origin: Instant,
     from_us: Option<u64>,
-    mut watch: impl FnMut(&Session) -> Result<(), E>,
+    watch: impl FnMut(&Session) -> Result<(), E>,
 ) -> Watched<E> {
     if let Some(t) = from_us {
         control.jump_to(t);
@@ -54,7 +54,16 @@ pub fn play<E>(
             result: Ok(Vec::new()),
         };
     }
-    let session = Session::start(song, lanes, Arc::clone(&control), origin);
+    watch_session(Session::start(song, lanes, control, origin), watch)
+}
+
+/// Calls `watch` with `session` (started by the caller: on a clock of its own, say) until
+/// every robot has finished, as [`play`] does.
+pub fn watch_session<E>(
+    session: Session,
+    mut watch: impl FnMut(&Session) -> Result<(), E>,
+) -> Watched<E> {
+    let control = Arc::clone(session.control());
     let watched = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         let mut failed = None;
         while !session.is_finished() {
