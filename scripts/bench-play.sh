@@ -3,7 +3,7 @@
 #
 # 1. Throughput: the largest MIDI file in ../shared/midi, rendered with
 #    `orch play --fast --json` (parse, schedule, interpreter, guard and virtual robot on the
-#    virtual clock) and parsed with `examples/midly_parse` (midly alone, every event walked).
+#    virtual clock) and parsed with `benches/midly_parse` (midly alone, every event walked).
 #    Wall time (best of 5) and peak RSS from /usr/bin/time, and the ratios.
 # 2. Real-clock lateness per message sent: `orch play --json --no-view` of a ~36-second piece
 #    in real time, on an idle machine and with a busy loop on every core; the report's
@@ -31,12 +31,15 @@ if [ ! -d "$MIDI_DIR" ]; then
 fi
 
 step "build (release)"
-cargo build --release --quiet --bin orch --example midly_parse
+cargo build --release --quiet --bin orch
 TARGET_DIR=$(cargo metadata --format-version 1 --no-deps |
     sed -n 's/.*"target_directory":"\([^"]*\)".*/\1/p')
 TARGET_DIR=${TARGET_DIR:-target}
 ORCH=$TARGET_DIR/release/orch
-MIDLY=$TARGET_DIR/release/examples/midly_parse
+# The baseline is a bench target (benches/midly_parse.rs): built, and its file named, by cargo.
+MIDLY=$(cargo bench --quiet --no-run --bench midly_parse --message-format=json |
+    sed -n 's/.*"executable":"\([^"]*\)".*/\1/p' | tail -n 1)
+[ -x "$MIDLY" ] || { echo "bench-play: benches/midly_parse did not build" >&2; exit 1; }
 
 # The largest MIDI file by size.
 BIG=$(find "$MIDI_DIR" -maxdepth 1 -type f \( -name '*.mid' -o -name '*.midi' -o -name '*.kar' \) \

@@ -19,8 +19,7 @@ use orch_seq::Song;
 /// (µs after the score's start: the video's time 0 is the score's, as `orch conduct` does),
 /// and wakes the follower between them when it asks, as `orch conduct`'s waker does: the
 /// conductor's tests' clock, the frames its inputs.
-#[path = "../crates/perform/tests/common/conducted.rs"]
-mod conducted;
+use testkit::conducted;
 
 use conducted::Conducted;
 

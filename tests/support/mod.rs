@@ -1,11 +1,10 @@
-//! Helpers shared by the `orch` package's tests, benchmarks and examples (`mod support;` in a
-//! test; `#[path = "../tests/support/mod.rs"] mod support;` elsewhere). Each user takes what it
+//! Helpers shared by the `orch` package's tests and benchmarks (`mod support;` in a test;
+//! `#[path = "../tests/support/mod.rs"] mod support;` in a bench). Each user takes what it
 //! needs, so some go unused in any one of them.
 #![allow(dead_code)]
 
-mod smf;
 #[allow(unused_imports)]
-pub use smf::quarters_smf;
+pub use testkit::smf::quarters_smf;
 
 /// A pseudo-terminal: its master, and the path of its slave for `orch run --in serial:PATH`.
 /// `raw`: the master's line discipline off (no echo, no translation of the bytes written).

@@ -31,7 +31,7 @@
 //!
 //! The harness's figures (every video of [`synth::suite`] at 30 and 60 fps: tempo error,
 //! beat time error, missed and invented beats) and the tracker's speed are printed by
-//! `cargo run --release -p orch-baton --example harness` and `--example speed`.
+//! `cargo bench -p orch-baton --bench harness` and `--bench speed`.
 //!
 //! Around it: [`source`] reads frames from a `.y4m` file, a folder of numbered PNGs, or any
 //! video through an `ffmpeg` subprocess (the only I/O here; a V4L2 camera would be one more

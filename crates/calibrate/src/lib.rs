@@ -28,7 +28,7 @@
 //! key is, its flight line on the hits 20 dB or more over the noise ([`strikes`]), and written
 //! as each `[[strike.output]]`'s `flight`/`soft_flight` (a pitched group: its bars' median in
 //! its `[[strike]]`), the outputs' loudness as a comment. [`synthetic::kit`] makes synthetic
-//! drum recordings (`tests/strikes.rs`, `--example strikes`); `--example rendered_drums`
+//! drum recordings (`tests/strikes.rs`, `--bench strikes`); `--bench rendered_drums`
 //! renders the kit through TimGM6mb.
 //!
 //! # Onsets
@@ -84,7 +84,7 @@
 //!   a thump does not repeat); where that comes more than 1 ms after the energy's rise (3 ms
 //!   after a soft strike's envelope timing), it is the onset. Soft strikes in the two lowest
 //!   octaves, where the thump's low thud is as loud as the string in the key's own bands,
-//!   can still come out a few ms off (`--example thump`). The thump is not measured.
+//!   can still come out a few ms off (`--bench thump`). The thump is not measured.
 //! - **A neighbour's decay still ringing**: keys are struck in order, a second apart, each
 //!   key's own noise frames (from 450 to 150 ms before each strike) hold whatever still
 //!   rings, so its threshold and string-power baseline include it; the timing crosses
@@ -104,10 +104,10 @@
 //! # Synthetic recordings
 //! [`synthetic`] makes recordings of the score by a robot with hidden figures, in a room
 //! with noise, reverberation and a capture offset: the tests and the accuracy figures
-//! (`cargo run --release -p orch-calibrate --example accuracy`) use it. The proof on
+//! (`cargo bench -p orch-calibrate --bench accuracy`) use it. The proof on
 //! *rendered* sound (the virtual robot with hidden per-key mechanics playing the score,
 //! `orch-render` making it sound) is in the crate's tests (`tests/rendered.rs`) and
-//! `cargo run --release -p orch-calibrate --example rendered`.
+//! `cargo bench -p orch-calibrate --bench rendered`.
 //!
 //! # Recording live
 //! With the `mic` feature, the `mic` module records from an ALSA capture device and `live`

@@ -403,7 +403,7 @@ const PERIODIC_MIN_LAG_MS: f64 = 3.0;
 /// The periodicity's rise must be this many robust standard deviations of its level before
 /// (from 50 to 15 ms before the onset) to time anything: at 20 dB SNR a soft strike's
 /// periodicity in noise, taken without it, moved strikes without a thump up to 4 ms on the
-/// synthetic recordings (`--example accuracy`).
+/// synthetic recordings (`--bench accuracy`).
 const PERIODIC_CLEAR: f64 = 30.0;
 /// A periodicity starting this much later than the high-passed energy's rise, ms, is the
 /// string after a thump.

@@ -11,8 +11,7 @@ use orch_seq::Song;
 
 mod common;
 
-#[path = "../../../tests/support/smf.rs"]
-mod smf;
+use testkit::smf;
 
 /// [`smf::quarters_smf`] parsed.
 fn quarters(beats: u32, bpm: f64) -> Song {

@@ -6,6 +6,18 @@
 //! draws; everything else lives here, so that a second front end says and does exactly what
 //! the first does.
 //!
+//! ```
+//! use orch_stage::play::Play;
+//!
+//! let song = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/ode-to-joy.mid");
+//! let song = std::path::Path::new(song);
+//! // The thesis's robot, on the virtual clock (as fast as the machine goes); without
+//! // `.fast(true)` it plays live, and `.watch(..)` looks on.
+//! let performed = Play::file(song).fast(true).run()?;
+//! print!("{}", orch_stage::text::reports(&performed.reports(), song));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! A song and a robot:
 //!
 //! - [`load`]: a Standard MIDI File read and checked ([`load_song`]: its first bytes before
@@ -21,6 +33,10 @@
 //!
 //! Playing it, live or on the virtual clock:
 //!
+//! - [`play`]: the one builder a front end needs ([`play::Play`]): told once the file, the
+//!   robot, the outputs, the tempo, the bar, the virtual or the real clock, who watches and
+//!   which files it leaves, it loads, sets up, plays and gives back every robot's end for the
+//!   report. `orch play` is this builder with the terminal's view as its watcher.
 //! - [`session`]: a song played live on one or more robots ([`session::Session`]: a sender
 //!   thread a robot, one clock, one `Control` for stop, pause, jump, tempo and a conductor;
 //!   jump to a bar, a checked tempo factor and tap tempo on the session itself),

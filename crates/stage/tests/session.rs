@@ -12,8 +12,7 @@ use orch_seq::Song;
 use orch_stage::session::{open_lanes, Session};
 use orch_stage::StageError;
 
-#[path = "../../../tests/support/smf.rs"]
-mod smf;
+use testkit::smf;
 
 fn setup() -> Setup {
     let robot = Robot::thesis();

@@ -8,8 +8,7 @@ use orch_perform::{Control, Follow, Follower, ScoreBeats};
 use orch_stage::sources::{follow, open_source, source_name, SourceSpec, Stamp, Status};
 use orch_stage::SourceError;
 
-#[path = "../../../tests/support/smf.rs"]
-mod smf;
+use testkit::smf;
 
 fn follower() -> Follower {
     let song = orch_seq::Song::parse(&smf::quarters_smf(32, 120.0)).unwrap();

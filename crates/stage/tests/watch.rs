@@ -11,8 +11,7 @@ use orch_seq::Song;
 use orch_stage::session::open_lanes;
 use orch_stage::watch::{self, WatchError};
 
-#[path = "../../../tests/support/smf.rs"]
-mod smf;
+use testkit::smf;
 
 /// `beats` quarter notes at 480 BPM (8 a second), on the virtual robot.
 fn play<E>(

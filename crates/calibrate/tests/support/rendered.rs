@@ -105,8 +105,7 @@ fn sf2(wave: &[i16]) -> Arc<SoundFont> {
     )
 }
 
-#[path = "../../../render/tests/support/sf2.rs"]
-mod sf2;
+use testkit::sf2;
 
 /// A robot with hidden per-key mechanics.
 pub struct Hidden {

@@ -2,7 +2,7 @@
 //! and a render on the virtual clock.
 #![allow(dead_code)]
 
-pub mod conducted;
+pub use testkit::conducted;
 
 use std::path::PathBuf;
 

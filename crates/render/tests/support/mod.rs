@@ -6,8 +6,7 @@ use std::sync::Arc;
 
 use orch_render::SoundFont;
 
-#[path = "sf2.rs"]
-mod sf2;
+use testkit::sf2;
 
 /// A SoundFont 2 with one preset (bank 0, program 0) of one sample: a square wave of ±0.5
 /// full scale, 100 samples a period, looped, recorded at `rate` Hz with root key 60. Its first

@@ -4,21 +4,13 @@
 //! plays and accounts, and gives back every robot's end ([`Performed`]) for the report.
 //!
 //! ```
-//! # let dir = std::env::temp_dir().join(format!("orch-stage-play-doc-{}", std::process::id()));
-//! # std::fs::create_dir_all(&dir).unwrap();
-//! # let song = dir.join("c.mid");
-//! # std::fs::write(&song, [
-//! #     b'M', b'T', b'h', b'd', 0, 0, 0, 6, 0, 0, 0, 1, 0x01, 0xE0,
-//! #     b'M', b'T', b'r', b'k', 0, 0, 0, 12,
-//! #     0x00, 0x90, 60, 100, 0x83, 0x60, 60, 0, 0x00, 0xFF, 0x2F, 0x00,
-//! # ]).unwrap();
 //! use orch_stage::play::Play;
 //!
-//! // The thesis's robot, on the virtual clock (as fast as the machine goes).
-//! let performed = Play::file(&song).fast(true).run().unwrap();
-//! let reports = performed.reports();
-//! # let orch_stage::Reports::One(report) = reports else { panic!() };
-//! # assert_eq!(report.outcomes.on_time, 1);
+//! let song = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/ode-to-joy.mid");
+//! let performed = Play::file(song).tempo(2.0).fast(true).run()?;
+//! let orch_stage::Reports::One(report) = performed.reports() else { unreachable!() };
+//! assert_eq!(report.notes, 114);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 mod error;

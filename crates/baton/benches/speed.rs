@@ -1,5 +1,5 @@
 //! Tracker speed: 640×480 frames a second on one core, against real time at 60 fps.
-//! `cargo run --release -p orch-baton --example speed`
+//! `cargo bench -p orch-baton --bench speed`
 //!
 //! The frames are drawn first (a cluttered scene with a red sleeve, an exit sign, a standby
 //! light, noise σ 8 and motion blur: the most red pixels the harness makes), then timed

@@ -2,7 +2,7 @@
 //! thesis robot and rendered through the installed soundfont (the performance and the
 //! synthesis timed apart), and the score itself.
 //!
-//! `cargo run --release -p orch-render --example render_speed [FILE.mid] [SF2]`
+//! `cargo bench -p orch-render --bench render_speed -- [FILE.mid] [SF2]`
 //! (default: `../shared/midi/bach-bwv846-prelude.mid` from the repository, the soundfont
 //! `orch render` would choose).
 
@@ -14,7 +14,8 @@ use orch_render::{events, soundfont, synth, Settings};
 use orch_seq::Song;
 
 fn main() {
-    let mut args = std::env::args().skip(1);
+    // `cargo bench` adds `--bench`.
+    let mut args = std::env::args().skip(1).filter(|a| a != "--bench");
     let file = args.next().map_or_else(
         || {
             Path::new(env!("CARGO_MANIFEST_DIR"))

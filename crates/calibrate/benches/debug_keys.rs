@@ -1,6 +1,6 @@
 //! Per-key detail of one synthetic calibration (for development).
 //!
-//! `cargo run --release -p orch-calibrate --example debug_keys [SNR] [rev|dry] [SEED]`
+//! `cargo bench -p orch-calibrate --bench debug_keys -- [SNR] [rev|dry] [SEED]`
 use orch_calibrate::synthetic::{duty, hidden_robot, record, Room};
 use orch_calibrate::{analyze, Anchor, Score};
 

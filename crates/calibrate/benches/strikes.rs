@@ -2,7 +2,7 @@
 //! boards) with hidden flights, softest duties and gains, its drums synthesised
 //! (`synthetic::kit`), at 40, 30 and 20 dB SNR with reverberation, anchored on the snare.
 //!
-//! `cargo run --release -p orch-calibrate --example strikes [SEEDS]`
+//! `cargo bench -p orch-calibrate --bench strikes -- [SEEDS]`
 
 use orch_calibrate::synthetic::kit::{flight, hidden_outputs, line_at, record};
 use orch_calibrate::synthetic::Room;

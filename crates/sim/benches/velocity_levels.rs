@@ -1,7 +1,7 @@
 //! Prints how many loudness levels the virtual robot tells apart on the default velocity
 //! curve, against the Yamaha Disklavier's 256–512 (Yamaha's figure; see SYSTEM.md).
 //!
-//! `cargo run --release -p orch-sim --example velocity_levels`
+//! `cargo bench -p orch-sim --bench velocity_levels`
 
 use std::collections::BTreeSet;
 

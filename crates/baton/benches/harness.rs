@@ -1,5 +1,5 @@
 //! The evaluation harness: scores the tracker on every generated video at 30 and 60 fps and
-//! prints the table (Markdown). `cargo run --release -p orch-baton --example harness`
+//! prints the table (Markdown). `cargo bench -p orch-baton --bench harness`
 //! (`-- 30` for one frame rate only).
 
 use orch_baton::{synth, Params};

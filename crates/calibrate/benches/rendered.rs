@@ -5,7 +5,7 @@
 //! calibration (with the anchor on middle C) is compared with the hidden figures. Also how
 //! fast the score renders, and how long it takes to play.
 //!
-//! `cargo run --release -p orch-calibrate --example rendered [SEEDS]`
+//! `cargo bench -p orch-calibrate --bench rendered -- [SEEDS]`
 
 #[path = "../tests/support/rendered.rs"]
 mod rendered;

@@ -2,7 +2,7 @@
 //! on the virtual bus through `orch-boards`' real drivers (prints; not a test).
 //!
 //! ```sh
-//! cargo run -p orch-sim --example pwm_bus_time
+//! cargo bench -p orch-sim --bench pwm_bus_time
 //! ```
 //!
 //! A transaction costs START + 9 bits a byte (the address byte too) + STOP. The PCA9555 is a

@@ -4,7 +4,7 @@
 //! planner, interpreter or virtual robot).
 //!
 //! ```sh
-//! cargo run --release --example midly_parse -- FILE
+//! cargo bench --bench midly_parse -- FILE
 //! ```
 //!
 //! Prints one line: tracks, events, Note-Ons with velocity above 0, and the longest track in

@@ -5,7 +5,7 @@
 //! adds a capture offset, reverberation (0.6 s, 0 dB direct-to-reverberant) and noise at 30
 //! dB SNR. Anchored on the snare. Each hit's measured flight against the virtual robot's.
 //!
-//! `cargo run --release -p orch-calibrate --example rendered_drums [SEEDS] [-v]` (`-v`: each
+//! `cargo bench -p orch-calibrate --bench rendered_drums -- [SEEDS] [-v]` (`-v`: each
 //! level's error)
 
 #[path = "../tests/support/rendered.rs"]

@@ -5,17 +5,13 @@
 //! robot, as in `tests/conduct.rs`; each note's sound is measured against its beat.
 //!
 //! ```sh
-//! cargo run --release -p orch-perform --example follow_figures
+//! cargo bench -p orch-perform --bench follow_figures
 //! ```
 
-#[path = "../tests/common/conducted.rs"]
-mod conducted;
-#[path = "../../../tests/support/smf.rs"]
-mod smf;
-
-use conducted::{conduct, input, Via};
 use orch_perform::Follow;
 use orch_seq::Song;
+use testkit::conducted::{self, conduct, input, Via};
+use testkit::smf;
 
 /// From which beat after the change's last old beat (the first at the new tempo is 1) every
 /// later note is within 25 ms of its beat; `None` if the last is not.

@@ -19,8 +19,8 @@
 //! the figure is orch's, not the bench's wait for a core.
 //!
 //! ```sh
-//! cargo build --release --bin orch --example conduct_latency
-//! target/release/examples/conduct_latency target/release/orch [SAMPLES] [busy]
+//! cargo build --release --bin orch
+//! cargo bench --bench conduct_latency -- target/release/orch [SAMPLES] [busy]
 //! ```
 //!
 //! Prints the median, 99th percentile and largest latency over the samples (40 by default).
@@ -98,7 +98,8 @@ fn ms(d: Duration) -> f64 {
 }
 
 fn main() {
-    let mut args = std::env::args().skip(1);
+    // `cargo bench` adds `--bench`.
+    let mut args = std::env::args().skip(1).filter(|a| a != "--bench");
     let orch = args
         .next()
         .expect("usage: conduct_latency PATH/TO/orch [SAMPLES]");

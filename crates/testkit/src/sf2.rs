@@ -1,8 +1,6 @@
-//! A SoundFont 2 written here, for the tests of orch-render and orch-calibrate (included by
-//! path in both): one preset (bank 0, program 0) of one instrument playing one mono sample on
+//! A SoundFont 2 written here, for the tests of orch-render and orch-calibrate: one preset
+//! (bank 0, program 0) of one instrument playing one mono sample on
 //! every key, root key 60.
-
-#![allow(dead_code)] // each including test uses its own part
 
 use std::sync::Arc;
 

@@ -1,7 +1,7 @@
 //! Calibration accuracy on synthetic recordings at 40, 30 and 20 dB SNR (with reverberation,
 //! a capture offset and the anchor), and how long the score takes to play.
 //!
-//! `cargo run --release -p orch-calibrate --example accuracy [SEEDS]`
+//! `cargo bench -p orch-calibrate --bench accuracy -- [SEEDS]`
 
 use orch_calibrate::synthetic::{clear_of_floor, errors, hidden_robot, record, Room};
 use orch_calibrate::{analyze, robot_toml, Anchor, Score};

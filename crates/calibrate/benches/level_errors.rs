@@ -5,7 +5,7 @@
 //! in the key's velocity steps (the written curve is within 3 steps when this is within
 //! ±1.5). Keys with problems other than a level below the softest are named.
 //!
-//! `cargo run --release -p orch-calibrate --example level_errors [SNR|x] [rev|dry] [ROBOT_SEED] [ROOM_SEED]`
+//! `cargo bench -p orch-calibrate --bench level_errors -- [SNR|x] [rev|dry] [ROBOT_SEED] [ROOM_SEED]`
 //! (x: no noise; the rendered test's robot is seed 5, its rooms 3, 1 and 6)
 #[path = "../tests/support/rendered.rs"]
 mod rendered;

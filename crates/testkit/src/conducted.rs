@@ -1,9 +1,7 @@
 //! A conductor on the virtual clock: beats at known times, sent as a source's bytes (OSC
 //! packets or MIDI clock) through that source's decoder and the follower to a performance
 //! of the virtual robot; each note's sound against its beat. Shared by the conductor's tests,
-//! the `follow_figures` example and `orch`'s baton tests (whose video frames are the inputs;
-//! `#[path]`-included there).
-#![allow(dead_code)]
+//! the `follow_figures` bench and `orch`'s baton tests (whose video frames are the inputs).
 
 use std::sync::Arc;
 

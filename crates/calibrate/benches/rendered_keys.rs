@@ -2,7 +2,7 @@
 //! against the hidden robot, its level, the fit, the problems, and the keys whose velocity
 //! curve is more than 3 steps off.
 //!
-//! `cargo run --release -p orch-calibrate --example rendered_keys [SNR|x] [rev|dry] [SEED]
+//! `cargo bench -p orch-calibrate --bench rendered_keys -- [SNR|x] [rev|dry] [SEED]
 //! [string|tim]` (x: no noise; tim: the installed soundfont instead of the test font)
 #[path = "../tests/support/rendered.rs"]
 mod rendered;

@@ -2,7 +2,7 @@
 //! the hold duty) against full power for the whole press, on the default PWM curve
 //! ([`Dynamics::PWM`]), for notes held 0.1 s to 10 s at three velocities.
 //!
-//! `cargo run --release -p orch-core --example hold_energy`
+//! `cargo bench -p orch-core --bench hold_energy`
 
 use orch_core::{Dynamics, Velocity};
 
