@@ -223,7 +223,7 @@ fn song_position_from_a_midi_clock_lands_on_its_bar() {
     assert_eq!(r.outcomes.skipped as usize, 16 - played_before, "{r:?}");
 }
 
-use common::conducted::{self, conduct, input, setup, Conducted, Run, Via};
+use testkit::conducted::{self, conduct, input, setup, Conducted, Run, Via};
 
 /// The worst |error| (ms) over `range` of the notes.
 fn worst(errors: &[f64], range: std::ops::Range<usize>) -> f64 {

@@ -2,8 +2,6 @@
 //! and a render on the virtual clock.
 #![allow(dead_code)]
 
-pub use testkit::conducted;
-
 use std::path::PathBuf;
 
 use std::sync::Arc;
