@@ -13,8 +13,6 @@
 
 #![cfg(feature = "link")]
 
-mod support;
-
 use std::io::{BufRead, BufReader, Write};
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -209,6 +207,24 @@ fn robot(net: &Net, host: usize, file: &str, port: u16) -> Child {
     .expect("orch")
 }
 
+/// `robot`'s output once it has exited; killed, and the test failed, if it has not within
+/// `within`.
+fn exited(mut robot: Child, within: Duration) -> std::process::Output {
+    let until = Instant::now() + within;
+    while robot.try_wait().unwrap().is_none() {
+        if Instant::now() > until {
+            let _ = robot.kill();
+            let out = robot.wait_with_output().unwrap();
+            panic!(
+                "a robot did not stop within {within:?} of the session: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    robot.wait_with_output().unwrap()
+}
+
 /// A Note-On as the collector stamped it.
 #[derive(Clone, Copy, Debug)]
 struct Onset {
@@ -256,7 +272,7 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
     let net = Net::new(5);
     let file = std::env::temp_dir().join(format!("orch-link-{}.mid", std::process::id()));
     // 400 quarter notes at 120 BPM, notes 48..71 in turn: a note tells its quarter.
-    std::fs::write(&file, support::quarters_smf(400, 120.0)).unwrap();
+    std::fs::write(&file, testkit::smf::quarters_smf(400, 120.0)).unwrap();
     let file = file.to_str().unwrap();
     let mut peer = Peer::start(&net, 0, 4);
     // Its session is older than the robots' by more than Link's 0.5 s: theirs join it (two
@@ -277,7 +293,7 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
     let stop_us = stopped[0];
     let mut ended = Vec::new();
     for (i, r) in robots.into_iter().enumerate() {
-        let out = r.wait_with_output().unwrap();
+        let out = exited(r, Duration::from_secs(10));
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(out.status.success(), "robot {}: {err}", i + 1);
         assert!(
