@@ -5,7 +5,7 @@ ports, and every message is stamped with the moment it arrived (the kernel's rec
 timestamp, so that this process's own scheduling delays nothing) in this peer's view of the
 session (its host time, beat and tempo).
 
-Commands, one a line: `tempo BPM`, `start`, `stop`, `peers` (prints the number of other
+Commands, one a line: `tempo BPM`, `start`, `stop`, `now`, `peers` (prints the number of other
 peers), `report` (prints every message received as one JSON line), `quit`. Each command is
 answered with one line (`ok ...`) once done."""
 
@@ -92,6 +92,9 @@ def main():
             continue
         elif words[0] == "quit":
             break
+        elif words[0] != "now":
+            print("unknown command", words[0], flush=True)
+            continue
         state = session.captureAppSessionState()
         print("ok", now, state.beatAtTime(now, QUANTUM), state.tempo(), flush=True)
 

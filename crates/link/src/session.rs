@@ -12,7 +12,8 @@
 //! round that a joining peer could take (starting the session itself would start a stopped
 //! one). So every orch peer that plays **announces** the state again when it sees the number
 //! of peers grow: it commits "playing since the same moment" (one µs apart, so that the SDK
-//! sends it), which changes nothing for those that knew, and tells the newcomer. A session
+//! sends it), which changes nothing for those that knew, and tells the newcomer; three times,
+//! half a second apart, in case a datagram is lost. A session
 //! played only by other apps (a DAW alone) is not announced again: there a newcomer waits
 //! for the next start.
 
@@ -29,6 +30,11 @@ use crate::timeline::Timeline;
 
 /// How often the session is looked at, while waiting and while following.
 pub const LOOK_EVERY: Duration = Duration::from_millis(2);
+
+/// How many times a newcomer is told that the session plays, and how far apart.
+pub const ANNOUNCEMENTS: u32 = 3;
+/// See [`ANNOUNCEMENTS`].
+pub const ANNOUNCE_EVERY: Duration = Duration::from_millis(500);
 
 /// How long a peer listens for a session before `--start` starts one: Link's discovery
 /// answers within a few hundred ms on a LAN.
@@ -200,7 +206,7 @@ impl Following {
 
 /// Keeps the performance that `control` steers (its clock's zero at `origin`) on the
 /// session's beat as `steer` says, looking every [`LOOK_EVERY`]; stops it, every key up, when
-/// the session stops; announces the session to each newcomer.
+/// the session stops; announces the session to each newcomer ([`ANNOUNCEMENTS`] times).
 pub fn follow(
     session: Arc<Session>,
     control: Arc<Control>,
@@ -212,14 +218,22 @@ pub fn follow(
     let thread = thread::spawn(move || {
         let mut followed = Followed::default();
         let mut peers = session.peers();
+        // Announcements still to make, and when the last was: a newcomer is told three
+        // times, half a second apart, in case one is lost.
+        let (mut to_announce, mut announced_at) = (0, Instant::now());
         while !flag.load(Ordering::SeqCst) && !control.stopping() {
             thread::sleep(LOOK_EVERY);
             let now_peers = session.peers();
             if now_peers > peers {
-                session.announce();
-                followed.announced += 1;
+                to_announce = ANNOUNCEMENTS;
             }
             peers = now_peers;
+            if to_announce > 0 && announced_at.elapsed() >= ANNOUNCE_EVERY {
+                session.announce();
+                followed.announced += 1;
+                to_announce -= 1;
+                announced_at = Instant::now();
+            }
             let Some(map) = control.time_map() else {
                 continue;
             };
