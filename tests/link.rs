@@ -54,7 +54,9 @@ impl Net {
             nix_is_root(),
             "tests/link.rs makes network namespaces: run as root (CI does)"
         );
-        let tag = std::process::id() % 100_000;
+        static NETS: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+        let n = NETS.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        let tag = std::process::id() % 10_000 * 10 + n;
         let bridge = format!("orchbr{tag}");
         let net = Net {
             bridge: bridge.clone(),
@@ -105,7 +107,11 @@ impl Net {
             .stdin(Stdio::piped())
             .spawn()
             .expect("nft (nftables)");
-        nft.stdin.take().unwrap().write_all(rules.as_bytes()).unwrap();
+        nft.stdin
+            .take()
+            .unwrap()
+            .write_all(rules.as_bytes())
+            .unwrap();
         assert!(nft.wait().unwrap().success(), "nft -f: {rules}");
     }
 
@@ -209,25 +215,27 @@ impl Drop for Peer {
 
 /// An `orch play --link` robot in host `host`, sending to the collector's port `port`.
 fn robot(net: &Net, host: usize, file: &str, port: u16) -> Child {
+    robot_with(net, host, file, port, &[])
+}
+
+/// [`robot`] with `more` arguments.
+fn robot_with(net: &Net, host: usize, file: &str, port: u16, more: &[&str]) -> Child {
     let out = format!("udp:{}:{port}", Net::addr(0));
-    net.command(
-        host,
-        ORCH,
-        &[
-            "play",
-            file,
-            "--link",
-            "--no-view",
-            "--no-compensation",
-            "--json",
-            "--out",
-            &out,
-        ],
-    )
-    .stdout(Stdio::piped())
-    .stderr(Stdio::piped())
-    .spawn()
-    .expect("orch")
+    let mut args = vec![
+        "play",
+        file,
+        "--link",
+        "--no-view",
+        "--no-compensation",
+        "--json",
+    ];
+    args.extend(["--out", out.as_str()]);
+    args.extend(more);
+    net.command(host, ORCH, &args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("orch")
 }
 
 /// `robot`'s output once it has exited; killed, and the test failed, if it has not within
@@ -293,7 +301,7 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
 #[test]
 fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
     let net = Net::new(5);
-    let file = std::env::temp_dir().join(format!("orch-link-{}.mid", std::process::id()));
+    let file = std::env::temp_dir().join(format!("orch-link-{}-4.mid", std::process::id()));
     // 400 quarter notes at 120 BPM, notes 48..71 in turn: a note tells its quarter.
     std::fs::write(&file, testkit::smf::quarters_smf(400, 120.0)).unwrap();
     let file = file.to_str().unwrap();
@@ -445,7 +453,10 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
         }
     }
     spreads.sort_by(f64::total_cmp);
-    eprintln!("the fourth robot came in {:.0} ms after it was started", waited / 1e3);
+    eprintln!(
+        "the fourth robot came in {:.0} ms after it was started",
+        waited / 1e3
+    );
     eprintln!(
         "onset spread across robots: median {:.3}, p99 {:.3}, max {:.3} ms over {} beats; off the beat max {worst:.3} ms",
         percentile(&spreads, 0.5),
@@ -453,5 +464,39 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
         spreads[spreads.len() - 1],
         spreads.len()
     );
+    let _ = std::fs::remove_file(file);
+}
+
+/// `--start` starts a session nobody has started, once it has listened for one for a second;
+/// the robot comes in on bar one, and the other peers see the session play.
+#[test]
+fn a_robot_with_start_starts_the_session_and_comes_in_on_bar_one() {
+    let net = Net::new(2);
+    let file = std::env::temp_dir().join(format!("orch-link-{}-1.mid", std::process::id()));
+    std::fs::write(&file, testkit::smf::quarters_smf(12, 120.0)).unwrap();
+    let mut peer = Peer::start(&net, 0, 1);
+    std::thread::sleep(Duration::from_millis(1_500));
+    let begun = peer.ask("now")[0];
+    let robot = robot_with(&net, 1, file.to_str().unwrap(), 9001, &["--start"]);
+    let out = exited(robot, Duration::from_secs(20));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report = peer.report();
+    let all = onsets(&report);
+    assert_eq!(all.len(), 12);
+    // The file played to its end on the beat; the session still plays.
+    assert!(all.iter().all(|o| o.off_ms().abs() < ON_BEAT_MS), "{all:?}");
+    assert!(
+        all[0].beat.round() % 4.0 == 0.0,
+        "bar one is on a bar line: {:?}",
+        all[0]
+    );
+    let first_ms = (all[0].host_us - begun) / 1e3;
+    eprintln!("--start: the first note {first_ms:.0} ms after the robot was started");
+    // A second to listen, at least 300 ms of lead-in, and at most a bar (2 s) to its line.
+    assert!((1_300.0..4_000.0).contains(&first_ms), "{first_ms}");
     let _ = std::fs::remove_file(file);
 }
