@@ -415,7 +415,7 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
 
     // The stop: every robot's last message is an All Notes Off or All Sound Off, soon after.
     for r in 0..4 {
-        let last = report.iter().filter(|m| m["peer"] == r).last().unwrap();
+        let last = report.iter().rfind(|m| m["peer"] == r).unwrap();
         let b: Vec<u64> = last["bytes"]
             .as_array()
             .unwrap()

@@ -4,7 +4,7 @@
 //! Link is how music software and hardware share tempo, beat and phase on a LAN: peers find
 //! each other by multicast, with no server, and any of them may change the tempo or start
 //! and stop. An orch robot joins as one more peer. A score quarter note is one session beat;
-//! every robot comes in on one bar line ([`entry`]); each look at the session
+//! every robot comes in on one bar line ([`entry()`]); each look at the session
 //! ([`Steer::step`]) keeps the performance on the beat, through the file's own tempo map;
 //! the session stopping stops the robot, every key up.
 //!
