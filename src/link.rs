@@ -103,7 +103,7 @@ mod imp {
     }
 
     impl Joined {
-        /// Keeps the performance on the session's beat until [`Followed::end`].
+        /// Keeps the performance on the session's beat until the follower's `end`.
         pub fn follow(&self) -> Followed {
             Followed(follow(
                 Arc::clone(&self.inner.session),
