@@ -11,9 +11,10 @@
 //! One piece, as a rehearsal goes: three robots wait; the independent peer starts the
 //! session; they come in together on bar one; it changes the tempo; a fourth robot joins
 //! mid-piece and comes in on the beat, at the score's place there; it stops the session, and
-//! every robot stops with every key up. The robots send at the score's time
+//! every robot stops with every key up. Four robots send at the score's time
 //! (`--no-compensation`), so the moment a message arrives is the moment its note sounds on a
-//! robot that strikes at once.
+//! robot that strikes at once; a fifth sends each note early by its own mechanics, and its
+//! report says its copy sounded each on time.
 
 #![cfg(feature = "link")]
 
@@ -220,18 +221,24 @@ fn robot(net: &Net, host: usize, file: &str, port: u16) -> Child {
 
 /// [`robot`] with `more` arguments.
 fn robot_with(net: &Net, host: usize, file: &str, port: u16, more: &[&str]) -> Child {
+    let mut args = robot_args(file, port, more);
+    args.push("--no-compensation".into());
+    spawn(args, |args| net.command(host, ORCH, args))
+}
+
+/// `orch play FILE --link` to the collector's port `port`, with `more`.
+fn robot_args(file: &str, port: u16, more: &[&str]) -> Vec<String> {
     let out = format!("udp:{}:{port}", Net::addr(0));
-    let mut args = vec![
-        "play",
-        file,
-        "--link",
-        "--no-view",
-        "--no-compensation",
-        "--json",
-    ];
-    args.extend(["--out", out.as_str()]);
-    args.extend(more);
-    net.command(host, ORCH, &args)
+    let mut args: Vec<String> = ["play", file, "--link", "--no-view", "--json", "--out", &out]
+        .map(String::from)
+        .to_vec();
+    args.extend(more.iter().map(|m| m.to_string()));
+    args
+}
+
+fn spawn(args: Vec<String>, command: impl Fn(&[&str]) -> Command) -> Child {
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    command(&args)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -300,22 +307,26 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
 
 #[test]
 fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
-    let net = Net::new(5);
+    let net = Net::new(6);
     let file = std::env::temp_dir().join(format!("orch-link-{}-4.mid", std::process::id()));
     // 400 quarter notes at 120 BPM, notes 48..71 in turn: a note tells its quarter.
     std::fs::write(&file, testkit::smf::quarters_smf(400, 120.0)).unwrap();
     let file = file.to_str().unwrap();
-    for robot in 1..=4 {
+    for robot in 1..=5 {
         net.lossy(robot, 20);
     }
-    let mut peer = Peer::start(&net, 0, 4);
+    let mut peer = Peer::start(&net, 0, 5);
     // Its session is older than the robots' by more than Link's 0.5 s: theirs join it (two
     // sessions met within 0.5 s go by their ids).
     std::thread::sleep(Duration::from_millis(1_500));
     let mut robots: Vec<Child> = (1..=3)
         .map(|i| robot(&net, i, file, 9000 + i as u16))
         .collect();
-    peer.wait_peers(3);
+    // A fifth robot sends each note early by its own mechanics, as robots do.
+    let compensated = spawn(robot_args(file, 9005, &[]), |args| {
+        net.command(5, ORCH, args)
+    });
+    peer.wait_peers(4);
     let started = peer.ask("start");
     std::thread::sleep(Duration::from_secs(6));
     let changed = peer.ask("tempo 130");
@@ -325,6 +336,9 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
     std::thread::sleep(Duration::from_secs(8));
     let stopped = peer.ask("stop");
     let stop_us = stopped[0];
+    let compensated = exited(compensated, Duration::from_secs(10));
+    assert!(compensated.status.success());
+    let compensated: Value = serde_json::from_slice(&compensated.stdout).unwrap();
     let mut ended = Vec::new();
     for (i, r) in robots.into_iter().enumerate() {
         let out = exited(r, Duration::from_secs(10));
@@ -349,6 +363,28 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
     if let Ok(path) = std::env::var("ORCH_LINK_DUMP") {
         std::fs::write(path, serde_json::to_string(&report).unwrap()).unwrap();
     }
+    // The compensated robot: each note sent early by its key's own delay (the same for every
+    // repeat of a note), and its copy at the far end sounded each on the beat.
+    let early = by(4);
+    assert!(early.len() > 20);
+    for note in 48..72 {
+        let offs: Vec<f64> = early
+            .iter()
+            .filter(|o| o.note == note)
+            .map(Onset::off_ms)
+            .collect();
+        let (lo, hi) = offs
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(l, h), &o| (l.min(o), h.max(o)));
+        assert!(
+            hi < -1.0 && hi - lo < 1.0,
+            "note {note}: sent {offs:?} ms off its beat"
+        );
+    }
+    let onset = &compensated["onset_ms"];
+    assert!(onset["max"].as_f64().unwrap() <= 1.0, "{onset}");
+    let all: Vec<Onset> = all.iter().filter(|o| o.robot != 4).copied().collect();
+
     // Every note of every robot on its beat.
     let mut offs: Vec<f64> = all.iter().map(|o| o.off_ms().abs()).collect();
     offs.sort_by(f64::total_cmp);
@@ -403,7 +439,7 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
     assert!(quarter_of(&late[0]) > 8, "{:?}", late[0]);
     let waited = late[0].host_us - joined_at;
     assert!(
-        waited < 3e6,
+        waited < 5e6,
         "it came in {:.0} ms after it was started",
         waited / 1e3
     );
@@ -414,7 +450,7 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
     assert_eq!(peer.ask("tempo 130")[2], 130.0);
 
     // The stop: every robot's last message is an All Notes Off or All Sound Off, soon after.
-    for r in 0..4 {
+    for r in 0..5 {
         let last = report.iter().rfind(|m| m["peer"] == r).unwrap();
         let b: Vec<u64> = last["bytes"]
             .as_array()
