@@ -42,11 +42,17 @@ pub enum DropReason {
     /// softest. The robot says so (the virtual robot's mechanics), never the interpreter,
     /// which struck the key as asked ([`dynamics`](crate::dynamics)).
     TooSoft,
+    /// A wind robot's note that cracked: its valve opened before its fingers had settled (or a
+    /// finger moved while it sounded), so the air found holes half closed and the note sounded
+    /// wrong or not at all. The robot says so (the virtual robot's mechanics), never the
+    /// interpreter, whose interlock keeps the valve closed for `settle`: a robot whose fingers
+    /// travel longer than that cracks.
+    Cracked,
 }
 
 impl DropReason {
     /// Every reason, in report order.
-    pub const ALL: [DropReason; 10] = [
+    pub const ALL: [DropReason; 11] = [
         DropReason::Channel,
         DropReason::Percussion,
         DropReason::Unmapped,
@@ -55,12 +61,13 @@ impl DropReason {
         DropReason::TooFast,
         DropReason::Monophonic,
         DropReason::TooSoft,
+        DropReason::Cracked,
         DropReason::Cancelled,
         DropReason::Stopped,
     ];
 
     /// The reason's name in reports: `channel`, `percussion`, `unmapped`, `range`, `power`,
-    /// `too_fast`, `monophonic`, `too_soft`, `cancelled`, `stopped`.
+    /// `too_fast`, `monophonic`, `too_soft`, `cracked`, `cancelled`, `stopped`.
     pub const fn name(self) -> &'static str {
         match self {
             DropReason::Channel => "channel",
@@ -73,6 +80,7 @@ impl DropReason {
             DropReason::Cancelled => "cancelled",
             DropReason::Stopped => "stopped",
             DropReason::TooSoft => "too_soft",
+            DropReason::Cracked => "cracked",
         }
     }
 }

@@ -39,7 +39,7 @@ pub struct NoteLine {
     /// (the report's outcomes).
     pub outcome: &'static str,
     /// Why it was dropped (`channel`, `percussion`, `unmapped`, `range`, `power`, `too_fast`,
-    /// `too_soft`, `cancelled`, `stopped`); only for `dropped`.
+    /// `too_soft`, `cracked`, `cancelled`, `stopped`); only for `dropped`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reason: Option<&'static str>,
     /// When its Note-On was sent, ms.

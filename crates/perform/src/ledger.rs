@@ -313,6 +313,8 @@ impl Ledger {
                     Outcome::OnTime { error_us: err }
                 }
             }
+            // A wind note whose valve opened on moving fingers: no note heard.
+            None if p.cracked => Outcome::Dropped(DropReason::Cracked),
             // Its strike was below the key's softest duty: the robot heard nothing.
             None if p.too_soft => Outcome::Dropped(DropReason::TooSoft),
             None => Outcome::Unmatched,

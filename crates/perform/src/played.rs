@@ -62,11 +62,11 @@ impl Played {
         let bus = self.performance.summary.bus;
         let span = self.end_us.saturating_sub(self.start_us).max(1) as f64;
         let s = &self.stats;
+        // Counted per key by the mechanics: the sounds themselves are not kept on a long
+        // performance (`Keep::Presses`).
         let downs_of = |keys: &[bool]| {
-            let down = |e: &&orch_sim::SoundEvent| {
-                e.kind == orch_sim::SoundKind::Down && keys.get(usize::from(e.key)) == Some(&true)
-            };
-            self.performance.sounds.iter().filter(down).count() as u64
+            let onsets = self.performance.onsets.iter().zip(keys);
+            onsets.filter(|(_, &is)| is).map(|(n, _)| n).sum::<u64>()
         };
         let lifts_and_dampers = downs_of(&self.extra_keys);
         let fingers = downs_of(&self.finger_keys);

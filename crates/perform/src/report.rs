@@ -116,6 +116,9 @@ pub struct Dropped {
     pub monophonic: u64,
     /// Struck too softly to sound: its duty below the key's softest (PWM keys only).
     pub too_soft: u64,
+    /// A wind note that cracked: its valve opened before its fingers settled, or a finger
+    /// moved while it sounded (the virtual robot says so; orch's interlock prevents it).
+    pub cracked: u64,
     /// A waiting re-strike cancelled (taken over, reset, watchdog).
     pub cancelled: u64,
     /// Not played because the performance was stopped.
@@ -133,6 +136,7 @@ impl Dropped {
             + self.too_fast
             + self.monophonic
             + self.too_soft
+            + self.cracked
             + self.cancelled
             + self.stopped
     }
@@ -184,6 +188,7 @@ impl Outcomes {
                         orch_core::DropReason::Cancelled => &mut d.cancelled,
                         orch_core::DropReason::Stopped => &mut d.stopped,
                         orch_core::DropReason::TooSoft => &mut d.too_soft,
+                        orch_core::DropReason::Cracked => &mut d.cracked,
                     } += 1;
                 }
             }
@@ -360,6 +365,12 @@ impl Report {
         }
         if d.monophonic > 0 {
             drums += &format!(", one voice plays another {}", d.monophonic);
+        }
+        if d.cracked > 0 {
+            drums += &format!(
+                ", cracked {} (the valve opened before the fingers settled)",
+                d.cracked
+            );
         }
         line(format!(
             "dropped                {} (channel {}{drums}, range {}, power budget {}, too fast {}{too_soft}, cancelled {}, stopped {})",

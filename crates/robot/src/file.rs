@@ -633,9 +633,11 @@ impl File {
         }
         groups.extend(strikes.groups);
         let mut outputs_mechanics = strikes.mechanics;
+        let mut wind_sim = None;
         if let Some(w) = wind {
             groups.push(w.group);
             outputs_mechanics.extend(w.mechanics);
+            wind_sim = Some(w.sim);
         }
         config
             .validate(MAX_KEYS)
@@ -646,10 +648,13 @@ impl File {
             kinds,
             pwm_hz,
             clock: clock(&self.bus.clock)?,
-            mechanics: crate::strike::with_outputs(
-                mechanics(&self.mechanics, range)?,
-                &outputs_mechanics,
-            ),
+            mechanics: orch_sim::MechanicsConfig {
+                wind: wind_sim,
+                ..crate::strike::with_outputs(
+                    mechanics(&self.mechanics, range)?,
+                    &outputs_mechanics,
+                )
+            },
             groups,
         })
     }

@@ -2,7 +2,7 @@
 //! [`Wind`] and the virtual robot's mechanics of its valve and fingers.
 
 use orch_core::{ChannelMask, Duration, Fingering, KeyRange, Note, OutOfRange, Voice, Wind};
-use orch_sim::KeyMechanics;
+use orch_sim::{Breath, KeyMechanics, WindMechanics};
 use serde::Deserialize;
 
 use crate::file::{channels, delay, duty, int, Policy};
@@ -49,6 +49,8 @@ pub(crate) struct Read {
     pub wind: Wind,
     pub group: Group,
     pub mechanics: Vec<(u8, KeyMechanics)>,
+    /// The virtual robot's view of it: its valve, fingers and table (its cracks and breath).
+    pub sim: WindMechanics,
 }
 
 /// The defaults: the valve closes in 5 ms, fingers settle in 30 ms (a solenoid's travel and
@@ -130,11 +132,32 @@ fn one(file: &FingeredFile, first: usize) -> Result<Read, RobotError> {
             program: Some(program),
         },
         mechanics: mechanics(first, fingers.len(), air),
+        sim: sim(&wind),
     })
 }
 
+/// The virtual robot's fingered group: what each fingering sounds and the breath it needs.
+fn sim(wind: &Wind) -> WindMechanics {
+    let table = (0..wind.range.keys() as u8)
+        .map(|i| {
+            let f = wind.fingering(i);
+            Breath {
+                fingers: f.fingers,
+                note: wind.range.low().get() + i,
+                breath: f.breath,
+            }
+        })
+        .collect();
+    WindMechanics {
+        valve: wind.valve(),
+        fingers: wind.fingers,
+        table,
+    }
+}
+
 /// The valve sounds `air` after it opens; a finger sounds nothing (its mechanics only time
-/// it: it travels in the settle time).
+/// it: on the virtual robot it closes its hole in 15 ms and lifts in 25 ms, the default key's
+/// travel, so a `settle` shorter than 25 ms cracks notes there).
 fn mechanics(first: usize, fingers: usize, air: Duration) -> Vec<(u8, KeyMechanics)> {
     let valve = KeyMechanics {
         press_delay: air,

@@ -60,6 +60,7 @@ pub fn reason(r: &str) -> &'static str {
         "percussion" => "a drum note on channel 10 that no group of the robot plays",
         "unmapped" => "a drum the kit has no output for",
         "too_soft" => "struck below the key's softest duty: no sound",
+        "cracked" => "the valve opened before the fingers settled: the note cracked",
         "cancelled" => "a waiting re-strike cancelled by a reset or the watchdog",
         "stopped" => "the performance was stopped first",
         _ => "no reason given",

@@ -4,7 +4,7 @@
 
 const $ = (id) => document.getElementById(id);
 const OUTCOMES = ["on_time", "late", "early", "unison", "joined", "dropped", "skipped", "unmatched"];
-const DROPS = ["channel", "percussion", "unmapped", "range", "power", "too_fast", "monophonic", "too_soft", "cancelled", "stopped"];
+const DROPS = ["channel", "percussion", "unmapped", "range", "power", "too_fast", "monophonic", "too_soft", "cracked", "cancelled", "stopped"];
 const BLACK = new Set([1, 3, 6, 8, 10]);
 
 let song = null;      // the song shown (the API's song object)

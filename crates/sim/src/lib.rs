@@ -15,6 +15,9 @@
 //! - [`Mechanics`] ([`mechanics`]): solenoids and keys, from pin edges to key-down and key-up
 //!   sound events, with press and release delays, a minimum hold, and smears (a re-press before
 //!   the key is back up).
+//! - [`WindMechanics`] ([`wind`]): a wind robot's valve and fingers among the keys: the
+//!   fingers' travel, a note that cracks when the valve opens before they settle, loudness by
+//!   breath.
 //! - [`Recorder`] and [`Performance`] ([`recorder`]): every write, edge and sound, with summary
 //!   figures; comparable (`==`), serialisable (serde) and printable as stable text.
 //!
@@ -49,6 +52,7 @@ pub mod pca9555;
 pub mod pca9685;
 pub mod recorder;
 pub mod robot;
+pub mod wind;
 
 pub use bus::{
     BusClock, BusError, BusStats, BusWrite, Chip, DutyChange, PinChange, SimTime, VirtualBus,
@@ -61,3 +65,4 @@ pub use pca9555::Pca9555;
 pub use pca9685::Pca9685;
 pub use recorder::{Performance, PinEdge, Recorder, Summary};
 pub use robot::{Keep, SimConfig, VirtualRobot};
+pub use wind::{Breath, WindMechanics};

@@ -70,6 +70,7 @@ use orch_core::Duration;
 use serde::Serialize;
 
 use crate::bus::SimTime;
+use crate::wind::{Blown, WindMechanics, WindTrack};
 
 /// The mechanical figures of one key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -203,6 +204,9 @@ pub struct MechanicsConfig {
     pub default: KeyMechanics,
     /// Per-key figures, by key index (0 = lowest key).
     pub overrides: BTreeMap<u8, KeyMechanics>,
+    /// A fingered group among the keys (a wind robot's valve and fingers), if any: its
+    /// cracks and its loudness by breath ([`wind`](crate::wind)).
+    pub wind: Option<WindMechanics>,
 }
 
 impl MechanicsConfig {
@@ -211,6 +215,7 @@ impl MechanicsConfig {
         Self {
             default,
             overrides: BTreeMap::new(),
+            wind: None,
         }
     }
 
@@ -274,6 +279,9 @@ pub struct Press {
     /// A beater that sounded but stayed powered against its head or bar past its
     /// `mute_after`: the sound was choked.
     pub muted: bool,
+    /// A wind robot's valve that opened before its fingers had settled, or stayed open while
+    /// a finger moved: the note cracked, no note was heard ([`wind`](crate::wind)).
+    pub cracked: bool,
 }
 
 impl Press {
@@ -299,6 +307,8 @@ pub struct MechanicsStats {
     pub too_soft: u64,
     /// Strikes that sounded but whose beater stayed on its head or bar past `mute_after`.
     pub muted: u64,
+    /// Openings of a wind robot's valve that cracked: no note heard.
+    pub cracked: u64,
     /// Key-up events.
     pub key_ups: u64,
     /// Pins still high when [`Mechanics::finish`] was called.
@@ -333,6 +343,9 @@ pub struct Mechanics {
     presses: Vec<Press>,
     keep_sounds: bool,
     stats: MechanicsStats,
+    wind: Option<WindTrack>,
+    /// Per key: its key-down events, clean and smeared.
+    onsets: Vec<u64>,
 }
 
 impl Mechanics {
@@ -346,6 +359,8 @@ impl Mechanics {
             presses: Vec::new(),
             keep_sounds: true,
             stats: MechanicsStats::default(),
+            wind: config.wind.clone().map(WindTrack::new),
+            onsets: vec![0; keys],
         }
     }
 
@@ -362,6 +377,12 @@ impl Mechanics {
     /// The counters so far.
     pub fn stats(&self) -> MechanicsStats {
         self.stats
+    }
+
+    /// Per key: its key-down events so far, clean and smeared (kept whether or not the
+    /// events are).
+    pub fn onsets(&self) -> &[u64] {
+        &self.onsets
     }
 
     /// The events decided so far, in the order they were decided (not always time order;
@@ -429,7 +450,22 @@ impl Mechanics {
             return;
         }
         let figures = self.figures[k];
-        match (self.state[k], high) {
+        let state = self.state[k];
+        if let Some(w) = &mut self.wind {
+            let moves = match state {
+                KeyState::Pressing { .. } => !high,
+                _ => high,
+            };
+            if moves {
+                let travel = if high {
+                    figures.press_delay
+                } else {
+                    figures.release_delay
+                };
+                w.moved(time, key, high, travel);
+            }
+        }
+        match (state, high) {
             (KeyState::Up, true) => {
                 self.state[k] = KeyState::Pressing {
                     since: time,
@@ -466,65 +502,90 @@ impl Mechanics {
                     duty: strike,
                 },
                 false,
-            ) => {
-                let long = time.nanos_since(since) >= figures.min_hold.as_micros() as u64 * 1_000;
-                let too_soft = long && !figures.sounds_at(strike);
-                let sounds = long && !too_soft;
-                let delay = figures.press_delay_at(strike);
-                // Powered on past its contact by more than it may be: the bar is choked.
-                let muted = sounds
-                    && figures.mute_after.is_some_and(|m| {
-                        time.nanos_since(since)
-                            > (delay.as_micros() as u64 + m.as_micros() as u64) * 1_000
-                    });
-                self.stats.muted += u64::from(muted);
-                self.presses.push(Press {
-                    key,
-                    pin_high: since,
-                    pin_low: time,
-                    sounded: sounds.then(|| since + delay),
-                    smeared,
-                    duty: strike,
-                    loudness: if sounds {
-                        figures.loudness_at(strike)
-                    } else {
-                        None
-                    },
-                    too_soft,
-                    muted,
-                });
-                if too_soft {
-                    self.stats.too_soft += 1;
-                }
-                let sounding = if sounds {
-                    let down = since + delay;
-                    self.emit(down, key, SoundKind::Down, smeared);
-                    if smeared {
-                        self.stats.smeared_onsets += 1;
-                    } else {
-                        self.stats.clean_onsets += 1;
-                    }
-                    self.last_down[k] = down;
-                    true
-                } else {
-                    if !too_soft {
-                        self.stats.short_pulses += 1;
-                    }
-                    was_sounding
-                };
-                self.state[k] = if sounding {
-                    KeyState::Returning {
-                        returns_at: (time + figures.release_delay).max(self.last_down[k]),
-                    }
-                } else {
-                    KeyState::Up
-                };
-            }
+            ) => self.release(time, key, since, smeared, was_sounding, strike),
             // Same level again: nothing moves.
             (KeyState::Pressing { .. }, true)
             | (KeyState::Up, false)
             | (KeyState::Returning { .. }, false) => {}
         }
+    }
+
+    /// `key`'s pin went low at `time`, ending its press from `since` at `strike`: the press
+    /// is decided (rules 1 to 3; a wind valve's crack and breath).
+    fn release(
+        &mut self,
+        time: SimTime,
+        key: u8,
+        since: SimTime,
+        smeared: bool,
+        was_sounding: bool,
+        strike: u16,
+    ) {
+        let k = key as usize;
+        let figures = self.figures[k];
+        let blown = match &mut self.wind {
+            Some(w) if w.is_valve(key) => w.closed(strike),
+            _ => Blown {
+                cracked: false,
+                heard_duty: strike,
+            },
+        };
+        let heard = blown.heard_duty;
+        let long = time.nanos_since(since) >= figures.min_hold.as_micros() as u64 * 1_000;
+        let cracked = long && blown.cracked;
+        let too_soft = long && !cracked && !figures.sounds_at(heard);
+        let sounds = long && !too_soft && !cracked;
+        let delay = figures.press_delay_at(heard);
+        // Powered on past its contact by more than it may be: the bar is choked.
+        let muted = sounds
+            && figures.mute_after.is_some_and(|m| {
+                time.nanos_since(since) > (delay.as_micros() as u64 + m.as_micros() as u64) * 1_000
+            });
+        self.stats.muted += u64::from(muted);
+        self.stats.cracked += u64::from(cracked);
+        self.presses.push(Press {
+            key,
+            pin_high: since,
+            pin_low: time,
+            sounded: sounds.then(|| since + delay),
+            smeared,
+            duty: strike,
+            loudness: if sounds {
+                figures.loudness_at(heard)
+            } else {
+                None
+            },
+            too_soft,
+            muted,
+            cracked,
+        });
+        if too_soft {
+            self.stats.too_soft += 1;
+        }
+        let sounding = if sounds {
+            let down = since + delay;
+            self.emit(down, key, SoundKind::Down, smeared);
+            if smeared {
+                self.stats.smeared_onsets += 1;
+            } else {
+                self.stats.clean_onsets += 1;
+            }
+            self.last_down[k] = down;
+            self.onsets[k] += 1;
+            true
+        } else {
+            if !too_soft && !cracked {
+                self.stats.short_pulses += 1;
+            }
+            was_sounding
+        };
+        self.state[k] = if sounding {
+            KeyState::Returning {
+                returns_at: (time + figures.release_delay).max(self.last_down[k]),
+            }
+        } else {
+            KeyState::Up
+        };
     }
 
     /// Closes the performance at `end`: every pin still high goes low at `end` (or at its

@@ -57,6 +57,9 @@ pub struct Performance {
     pub sounds: Vec<SoundEvent>,
     /// Every press and what it gave, in the order the pins went low.
     pub presses: Vec<Press>,
+    /// Per key: its key-down sounds (clean and smeared), counted whatever the robot keeps
+    /// ([`Keep`](crate::Keep)).
+    pub onsets: Vec<u64>,
     /// The figures.
     pub summary: Summary,
 }
@@ -200,6 +203,7 @@ impl Recorder {
             edges: self.edges,
             sounds,
             presses,
+            onsets: Vec::new(),
             summary,
         }
     }

@@ -329,13 +329,15 @@ impl VirtualRobot {
         let end = end.into().max(self.bus.free_at());
         let sounds = self.mechanics.finish(end);
         let presses = self.mechanics.take_presses();
-        self.recorder.finish(
+        let mut performance = self.recorder.finish(
             end,
             sounds,
             presses,
             self.bus.stats(),
             self.mechanics.stats(),
-        )
+        );
+        performance.onsets = self.mechanics.onsets().to_vec();
+        performance
     }
 }
 

@@ -36,7 +36,7 @@ pub fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
     ));
     let d = &o.dropped;
     let budget = robot.config.guard.max_keys_down;
-    let counted: [(u64, String); 18] = [
+    let counted: [(u64, String); 19] = [
         (
             o.joined,
             "notes land on a key already down for another note and make no sound of their own"
@@ -110,6 +110,12 @@ pub fn findings(song: &Song, robot: &Robot, r: &Report) -> Vec<String> {
             d.too_soft,
             "notes will strike too softly to sound (below the key's softest duty: raise \
              dynamics.softest, or lower mechanics.softest if the keys sound softer than that)"
+                .into(),
+        ),
+        (
+            d.cracked,
+            "wind notes will crack: the valve opens before the fingers settle (raise the \
+             fingered group's settle to the fingers' travel)"
                 .into(),
         ),
         (
