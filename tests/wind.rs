@@ -217,3 +217,64 @@ fn the_recorder_is_heard_through_its_program_at_each_notes_pitch() {
         "{first} Hz, {second} Hz"
     );
 }
+
+#[test]
+fn a_robot_whose_fingers_travel_longer_than_its_settle_cracks_and_the_account_says_so() {
+    let dir = scratch("crack");
+    // The virtual robot's fingers lift in 25 ms; a settle of 10 ms opens the valve on them.
+    let text = std::fs::read_to_string(recorder(&dir)).unwrap();
+    assert!(text.contains("settle = \"30ms\""));
+    let robot = dir.join("hasty.toml");
+    std::fs::write(
+        &robot,
+        text.replace("settle = \"30ms\"", "settle = \"10ms\""),
+    )
+    .unwrap();
+    // C5 (every finger down), then E5 (6a..7b lift), then E5 again, legato: the valve
+    // closes and opens again with no finger moving, so that one does not crack.
+    let midi = dir.join("three.mid");
+    std::fs::write(&midi, smf(&[(0, 72, 500), (500, 76, 500), (1000, 76, 400)])).unwrap();
+    let (report, lines, _) = play(&robot, &midi, &dir);
+    let got: Vec<(&str, Option<&str>)> = lines
+        .iter()
+        .map(|l| (l["outcome"].as_str().unwrap(), l["reason"].as_str()))
+        .collect();
+    assert_eq!(
+        got,
+        [
+            ("dropped", Some("cracked")),
+            ("dropped", Some("cracked")),
+            ("on_time", None)
+        ],
+        "{lines:#?}"
+    );
+    let o = &report["outcomes"];
+    assert_eq!(o["dropped"]["cracked"], 2, "{report}");
+    assert_eq!(o["on_time"], 1);
+    assert_eq!(report["strikes"], 1, "a cracked note is heard as no note");
+    assert_eq!(report["unmatched"], 0);
+    // The default settle (30 ms) plays the same notes clean.
+    let (report, _, _) = play(&recorder(&dir), &midi, &dir);
+    assert_eq!(report["outcomes"]["on_time"], 3, "{report}");
+    assert_eq!(report["outcomes"]["dropped"]["cracked"], 0);
+}
+
+#[test]
+fn on_pwm_boards_each_note_sounds_at_its_velocity_whatever_breath_it_needs() {
+    let dir = scratch("breath");
+    let out = orch()
+        .args(["config", "--instrument", "recorder", "--boards", "pca9685"])
+        .output()
+        .unwrap();
+    let robot = dir.join("pwm.toml");
+    std::fs::write(&robot, out.stdout).unwrap();
+    // C5 needs 45 % of the valve, D7 100 %: each is heard at its velocity (100).
+    let midi = dir.join("low-high.mid");
+    std::fs::write(&midi, smf(&[(0, 72, 400), (500, 98, 400), (1000, 84, 400)])).unwrap();
+    let (report, lines, _) = play(&robot, &midi, &dir);
+    assert_eq!(report["outcomes"]["on_time"], 3, "{report}");
+    for l in &lines {
+        let heard = l["sounded_velocity"].as_u64().unwrap();
+        assert!(heard.abs_diff(100) <= 1, "{l}");
+    }
+}

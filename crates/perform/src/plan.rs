@@ -105,6 +105,11 @@ impl KeyMap {
         self.0.wind.is_on() && key == usize::from(self.0.wind.valve())
     }
 
+    /// Which note of a chord the fingered group plays.
+    pub fn voice(&self) -> orch_core::Voice {
+        self.0.wind.voice
+    }
+
     /// The fingered group's settle and close times, µs.
     pub fn wind_times_us(&self) -> (i64, i64) {
         let w = &self.0.wind;
