@@ -748,7 +748,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                     // A finger or the valve: the whole group stops, the valve with it.
                     #[cfg(feature = "wind")]
                     if self.config.is_wind(key) {
-                        self.wind_cut(now);
+                        self.wind_cut(now, sink);
                     }
                 }
                 if cut_by_hold || cut_by_duty || (short && age >= min_press) {

@@ -261,6 +261,9 @@ pub(crate) struct WindState {
     /// Whether the target's own Note-Off has come (it still waits to sound).
     pub released: bool,
     pub phase: Phase,
+    /// The note the guard cut while it sounded, until its own Note-Off: the next note is
+    /// timed as if its valve had closed then (the performer sent it so).
+    pub cut_note: Option<u8>,
 }
 
 impl WindState {
@@ -272,6 +275,7 @@ impl WindState {
         target: None,
         released: false,
         phase: Phase::Idle,
+        cut_note: None,
     };
 
     pub(crate) fn holds(&self, note: u8) -> bool {

@@ -83,6 +83,15 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     pub(super) fn wind_note_off(&mut self, note: Note, now: u32) {
         let n = note.get();
         self.wind_state.let_go(n);
+        if self.wind_state.cut_note == Some(n) && self.wind_state.phase == Phase::Idle {
+            // The note the guard cut ends: the air stops `close` from now, as if its valve
+            // had been open until its Note-Off, so the next note waits for it as planned.
+            self.wind_state.cut_note = None;
+            let until = now.wrapping_add(self.config.wind.close.as_micros());
+            self.wind_state.phase = Phase::Closing { until };
+            self.due = self.due.min(until);
+            return;
+        }
         if self.wind_state.target.is_none_or(|t| t.0 != n) || self.wind_state.released {
             return;
         }
@@ -228,8 +237,21 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     }
 
     /// The guard cut one of the group's outputs (hold or duty limit): the whole group stops,
-    /// the valve with it, its notes forgotten.
-    pub(super) fn wind_cut(&mut self, now: u32) {
+    /// the valve with it, its notes forgotten; a note still preparing is cancelled.
+    pub(super) fn wind_cut<S: NoteSink>(&mut self, now: u32, sink: &mut S) {
+        let st = self.wind_state;
+        self.wind_state.cut_note = st
+            .target
+            .filter(|_| st.phase != Phase::Idle && !st.released)
+            .map(|t| t.0);
+        if st.target.is_some() && matches!(st.phase, Phase::Closing { .. } | Phase::Settling { .. })
+        {
+            self.count(|s| s.dropped_cancelled += 1);
+            sink.note(NoteEvent::WaitEnded {
+                key: self.config.wind.valve(),
+                reason: DropReason::Cancelled,
+            });
+        }
         self.wind_state.clear_notes();
         self.wind_state.target = None;
         let wind = self.config.wind;
