@@ -278,3 +278,75 @@ fn on_pwm_boards_each_note_sounds_at_its_velocity_whatever_breath_it_needs() {
         assert!(heard.abs_diff(100) <= 1, "{l}");
     }
 }
+
+/// The notes of `file` on channels other than 10, in the account's order (score time, then
+/// the file's): (onset µs, note, the highest note held at its onset, its own included).
+fn melody_of(file: &Path) -> Vec<(u64, u8, u8)> {
+    let song = orch_seq::Song::parse(&std::fs::read(file).unwrap()).unwrap();
+    let mut notes: Vec<(u64, u64, u8, u8)> = Vec::new(); // on, off, channel, note
+    for e in song.events() {
+        if let Some((ch, n, _)) = e.bytes.note_on().filter(|m| m.0 != 9) {
+            notes.push((e.time_us, u64::MAX, ch, n));
+        } else if let Some((ch, n)) = e.bytes.note_off().filter(|m| m.0 != 9) {
+            // As MIDI has it: a Note-Off ends the note on its channel, however many times
+            // it was struck (a chorale's two voices on one note end with the first).
+            let open = notes
+                .iter_mut()
+                .filter(|x| x.1 == u64::MAX && (x.2, x.3) == (ch, n));
+            open.for_each(|x| x.1 = e.time_us);
+        }
+    }
+    let mut v: Vec<(u64, u8, u8)> = notes
+        .iter()
+        .map(|&(on, _, _, n)| {
+            let held = notes.iter().filter(|x| x.0 <= on && x.1 > on);
+            (on, n, held.map(|x| x.3).max().unwrap_or(n))
+        })
+        .collect();
+    v.sort_by_key(|x| x.0); // stable: the file's order at the same time
+    v
+}
+
+#[test]
+fn the_recorder_plays_the_highest_note_of_corpus_parts_where_its_mechanics_allow() {
+    let dir = scratch("corpus");
+    let robot = recorder(&dir);
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/midi");
+    let files = [
+        "bach-bwv66-6-chorale.mid",
+        "mozart-k545-exposition.mid",
+        "bach-invention-01.mid",
+        "m21-k525short.mid",
+    ];
+    let mut on_time = 0;
+    for file in files {
+        let path = corpus.join(file);
+        let (report, lines, _) = play(&robot, &path, &dir);
+        let melody = melody_of(&path);
+        assert_eq!(lines.len(), melody.len(), "{file}");
+        for (l, &(_, note, highest)) in lines.iter().zip(&melody) {
+            assert_eq!(l["note"], note, "{file}: {l}");
+            let reason = l["reason"].as_str();
+            match l["outcome"].as_str().unwrap() {
+                // What sounds is the part's highest note at its onset, on time.
+                "on_time" => {
+                    assert_eq!(note, highest, "{file}: a lower note sounded: {l}");
+                    on_time += 1;
+                }
+                // A lower note of a chord, or under a held melody note, is not played.
+                "dropped" if reason == Some("monophonic") => {
+                    assert!(note < highest, "{file}: the melody was dropped: {l}")
+                }
+                // Where the mechanics do not allow it, the account says why: a note released
+                // before its fingers settled, or one the guard cut while it prepared.
+                "dropped" if matches!(reason, Some("too_fast" | "cancelled")) => {}
+                "unison" | "joined" => {}
+                _ => panic!("{file}: {l}"),
+            }
+        }
+        assert_eq!(report["unmatched"], 0, "{file}");
+        assert_eq!(report["outcomes"]["late"], 0, "{file}");
+        assert_eq!(report["outcomes"]["early"], 0, "{file}");
+    }
+    assert!(on_time > 400, "{on_time} notes on time");
+}

@@ -237,7 +237,9 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     }
 
     /// The guard cut one of the group's outputs (hold or duty limit): the whole group stops,
-    /// the valve with it, its notes forgotten; a note still preparing is cancelled.
+    /// the valve with it; a note still preparing is cancelled. The notes held stay held (their
+    /// Note-Offs let them go): a chord's lower note arriving after the cut does not sound in
+    /// its melody's place.
     pub(super) fn wind_cut<S: NoteSink>(&mut self, now: u32, sink: &mut S) {
         let st = self.wind_state;
         self.wind_state.cut_note = st
@@ -252,7 +254,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
                 reason: DropReason::Cancelled,
             });
         }
-        self.wind_state.clear_notes();
+        // The notes held stay held: a lower note of the chord arriving next still loses.
         self.wind_state.target = None;
         let wind = self.config.wind;
         for key in wind.first..=wind.first + wind.fingers {
