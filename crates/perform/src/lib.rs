@@ -109,7 +109,7 @@ pub use plan::{
     Jumped, KeyMap, NoteId, PlanRules, PlanStats, Planned, Planner, ScoreEvent, Skipped,
 };
 pub use played::{Played, VELOCITY_TOLERANCE};
-pub use report::{Bus, Dropped, Outcomes, Planning, Report, Spread, VelocityError};
+pub use report::{Bus, Dropped, GroupReport, Outcomes, Planning, Report, Spread, VelocityError};
 pub use robot::{
     sim_boards, Boards, Decided, HostInterpreter, LocalRobot, RobotError, SimBoards, MAX_BOARDS,
     MAX_KEYS,

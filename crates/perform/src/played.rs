@@ -5,7 +5,7 @@ use orch_sim::Performance;
 
 use crate::ledger::{NoteRecord, Outcome};
 use crate::plan::PlanStats;
-use crate::report::{Bus, Outcomes, Report, Spread, VelocityError};
+use crate::report::{Bus, GroupReport, Outcomes, Report, Spread, VelocityError};
 
 /// How far a struck note's loudness may be from its velocity, in MIDI velocity steps, before
 /// `orch analyze` names it as too loud or too soft for the robot.
@@ -45,6 +45,9 @@ pub struct Played {
     pub extra_keys: Vec<bool>,
     /// Per key: whether it is a wind robot's finger (its notes sound on its valve).
     pub finger_keys: Vec<bool>,
+    /// The robot's groups, each its name and outputs, if it has more than one (see
+    /// [`Setup::groups`](crate::Setup::groups)).
+    pub groups: Vec<(String, std::ops::Range<u8>)>,
 }
 
 impl Played {
@@ -105,7 +108,31 @@ impl Played {
                 let mut ms: Vec<f64> = l.iter().map(|&u| u as f64 / 1000.0).collect();
                 Spread::of(&mut ms)
             }),
+            groups: self.group_reports(),
         }
+    }
+
+    /// How each group fared: its notes (those that landed on its outputs) and their outcomes.
+    fn group_reports(&self) -> Vec<GroupReport> {
+        self.groups
+            .iter()
+            .map(|(name, keys)| {
+                let mine: Vec<NoteRecord> = self
+                    .records
+                    .iter()
+                    .filter(|r| r.landing.is_some_and(|l| keys.contains(&l.key)))
+                    .copied()
+                    .collect();
+                let (outcomes, unmatched) = Outcomes::of(&mine);
+                GroupReport {
+                    name: name.clone(),
+                    notes: mine.len() as u64,
+                    outcomes,
+                    unmatched,
+                    onset_ms: Spread::of_onsets(&mine),
+                }
+            })
+            .collect()
     }
 
     /// Whether `r` struck on a PWM key and sounded louder (`Some(true)`) or softer

@@ -303,6 +303,46 @@ pub struct Report {
     /// Real-clock lateness of each message sent, ms (real-time play only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lateness_ms: Option<Spread>,
+    /// How each group of a robot with several (a piano, a kit, a recorder) fared; absent for
+    /// a robot of one group. A note is its group's if it landed on one of its outputs; notes
+    /// that landed nowhere (a channel no group listens to) are no group's.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub groups: Vec<GroupReport>,
+}
+
+/// How one group of the robot fared.
+#[derive(Clone, Debug, Serialize)]
+pub struct GroupReport {
+    /// Its name (robot.toml's; "keyboard" for the keys).
+    pub name: String,
+    /// The notes that landed on its outputs.
+    pub notes: u64,
+    /// What became of them.
+    pub outcomes: Outcomes,
+    /// Those that struck but made no sound.
+    pub unmatched: u64,
+    /// |sound − score| of its struck notes, ms.
+    pub onset_ms: Spread,
+}
+
+impl GroupReport {
+    /// One line of the text report.
+    fn line(&self) -> String {
+        let o = &self.outcomes;
+        format!(
+            "group {:<16} {} notes: {} on time, {} late, {} early, {} unison, {} joined, {} dropped; onset error median {:.3}, max {:.3} ms",
+            self.name,
+            self.notes,
+            o.on_time,
+            o.late,
+            o.early,
+            o.unison,
+            o.joined,
+            o.dropped.total(),
+            self.onset_ms.median,
+            self.onset_ms.max
+        )
+    }
 }
 
 impl Report {
@@ -443,6 +483,9 @@ impl Report {
         ));
         if let Some(l) = &self.lateness_ms {
             line(format!("real-clock lateness    {} per message sent", sp(l)));
+        }
+        for g in &self.groups {
+            line(g.line());
         }
         t
     }

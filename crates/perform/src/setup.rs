@@ -28,6 +28,9 @@ pub struct Setup {
     pub tempo: Tempo,
     /// How the bytes reach the robot.
     pub link: Link,
+    /// The robot's groups (a keyboard, a kit, a recorder: robot.toml's), each its name and
+    /// its outputs, when it has more than one: the report then says how each fared.
+    pub groups: Vec<(String, std::ops::Range<u8>)>,
 }
 
 impl Setup {
@@ -40,6 +43,7 @@ impl Setup {
             compensation: true,
             tempo: Tempo::NORMAL,
             link: Link::Direct,
+            groups: Vec::new(),
         }
     }
 
@@ -52,7 +56,12 @@ impl Setup {
     /// How `robot` (a robot.toml) plays on this host: its keys and its virtual copy, keeping
     /// the presses and the figures (what the report needs), not every write and edge.
     pub fn for_robot(robot: &orch_robot::Robot) -> Self {
-        Self::new(robot.config, robot.sim_config()).with_keep(Keep::Presses)
+        let mut setup = Self::new(robot.config, robot.sim_config()).with_keep(Keep::Presses);
+        if robot.groups.len() > 1 {
+            let groups = robot.groups.iter();
+            setup.groups = groups.map(|g| (g.name.clone(), g.keys())).collect();
+        }
+        setup
     }
 
     /// With or without compensation.

@@ -69,6 +69,7 @@ impl<S: Iterator<Item = ScoreEvent> + Clone> Run<'_, S> {
             dynamic_keys: self.setup.dynamic_keys(),
             extra_keys: self.setup.extra_keys(),
             finger_keys: self.setup.finger_keys(),
+            groups: self.setup.groups.clone(),
         })
     }
 }
