@@ -297,7 +297,7 @@ fn orch() -> Command {
 /// the piano roll shown is what `orch analyze --svg` draws.
 #[test]
 fn the_generated_reference_is_what_orch_prints() {
-    let cases: [(&str, &[&str]); 4] = [
+    let cases: [(&str, &[&str]); 5] = [
         ("piano.toml", &["config"]),
         ("piano-pca9685.toml", &["config", "--boards", "pca9685"]),
         ("drums.toml", &["config", "--instrument", "drums"]),
@@ -305,6 +305,7 @@ fn the_generated_reference_is_what_orch_prints() {
             "glockenspiel.toml",
             &["config", "--instrument", "glockenspiel"],
         ),
+        ("recorder.toml", &["config", "--instrument", "recorder"]),
     ];
     let dir = book_src().join("reference/generated");
     let update = std::env::var_os("ORCH_BOOK_UPDATE").is_some();
