@@ -232,6 +232,9 @@ impl core::fmt::Display for WindError {
     }
 }
 
+/// No note (MIDI notes are 0..=127).
+pub(crate) const NO_NOTE: u8 = 0x80;
+
 /// Where the group is in playing a note.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub(crate) enum Phase {
@@ -248,7 +251,7 @@ pub(crate) enum Phase {
 }
 
 /// The group's state in the interpreter: the notes held, the note it plays and its phase.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(crate) struct WindState {
     /// The notes held on its channels, one bit each (as written).
     held: [u8; 16],
@@ -261,9 +264,16 @@ pub(crate) struct WindState {
     /// Whether the target's own Note-Off has come (it still waits to sound).
     pub released: bool,
     pub phase: Phase,
-    /// The note the guard cut while it sounded, until its own Note-Off: the next note is
-    /// timed as if its valve had closed then (the performer sent it so).
-    pub cut_note: Option<u8>,
+    /// The note the guard cut while it sounded or prepared, until its own Note-Off: the next
+    /// note is timed as if its valve had closed then (the performer sent it so).
+    /// [`NO_NOTE`] for none (a byte, not an `Option`'s two: the state stays 40 bytes).
+    pub cut_note: u8,
+}
+
+impl Default for WindState {
+    fn default() -> Self {
+        Self::NEW
+    }
 }
 
 impl WindState {
@@ -275,7 +285,7 @@ impl WindState {
         target: None,
         released: false,
         phase: Phase::Idle,
-        cut_note: None,
+        cut_note: NO_NOTE,
     };
 
     pub(crate) fn holds(&self, note: u8) -> bool {

@@ -83,10 +83,10 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
     pub(super) fn wind_note_off(&mut self, note: Note, now: u32) {
         let n = note.get();
         self.wind_state.let_go(n);
-        if self.wind_state.cut_note == Some(n) && self.wind_state.phase == Phase::Idle {
+        if self.wind_state.cut_note == n && self.wind_state.phase == Phase::Idle {
             // The note the guard cut ends: the air stops `close` from now, as if its valve
             // had been open until its Note-Off, so the next note waits for it as planned.
-            self.wind_state.cut_note = None;
+            self.wind_state.cut_note = crate::wind::NO_NOTE;
             let until = now.wrapping_add(self.config.wind.close.as_micros());
             self.wind_state.phase = Phase::Closing { until };
             self.due = self.due.min(until);
@@ -245,7 +245,7 @@ impl<const B: usize, const K: usize, H: HeldNotes, C: ConfigSource<B>> Interpret
         self.wind_state.cut_note = st
             .target
             .filter(|_| st.phase != Phase::Idle && !st.released)
-            .map(|t| t.0);
+            .map_or(crate::wind::NO_NOTE, |t| t.0);
         if st.target.is_some() && matches!(st.phase, Phase::Closing { .. } | Phase::Settling { .. })
         {
             self.count(|s| s.dropped_cancelled += 1);
