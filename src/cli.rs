@@ -345,6 +345,13 @@ pub struct ConductArgs {
     /// Log what the outputs and the source do on standard error.
     #[arg(long)]
     pub verbose: bool,
+    /// Lead the Ableton Link session on the network (built with the `link` feature): start it
+    /// for bar one, a second or so from now, where the performance starts, and publish the
+    /// tempo and phase the performance follows, so that robots on other hosts waiting with
+    /// `orch play --link` come in together and follow this conductor; the session stops when
+    /// the performance ends.
+    #[arg(long, conflicts_with = "from")]
+    pub link: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

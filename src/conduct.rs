@@ -40,6 +40,20 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
         SourceError::BadInput(m) => bad_input(format!("--source {m}")),
         e => anyhow::Error::new(e),
     })?;
+    // With --link: the session started for bar one, where the performance starts.
+    #[cfg(feature = "link")]
+    let leader = match args.link {
+        true => Some(crate::link::lead(
+            &song,
+            &conducting.control,
+            conducting.origin,
+        )?),
+        false => None,
+    };
+    #[cfg(not(feature = "link"))]
+    if args.link {
+        crate::link::lead(&song, &conducting.control, conducting.origin)?;
+    }
     let played = live::play_live(
         song,
         lanes,
@@ -51,7 +65,12 @@ pub fn run(args: &ConductArgs) -> anyhow::Result<()> {
             conductor: Some(&conducting),
             steered: None,
         },
-    )?;
+    );
+    #[cfg(feature = "link")]
+    if let Some(leader) = leader {
+        leader.end();
+    }
+    let played = played?;
     if !args.json {
         println!("{}", conducting.line());
     }

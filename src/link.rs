@@ -33,7 +33,7 @@ pub fn quantum(song: &Song) -> f64 {
 }
 
 #[cfg(feature = "link")]
-pub use imp::join;
+pub use imp::{join, lead, Leader};
 
 #[cfg(feature = "link")]
 mod imp {
@@ -41,8 +41,8 @@ mod imp {
     use std::sync::Arc;
     use std::time::Instant;
 
-    use orch_link::session::{follow, Following, Session};
-    use orch_link::{entry, Steer, Timeline};
+    use orch_link::session::{follow, Following, Leading, Session, DISCOVERY};
+    use orch_link::{entry, Lead, Steer, Timeline};
     use orch_perform::{Control, Planner, ScoreBeats, Setup, Tempo, WallTime};
     use orch_seq::Song;
 
@@ -114,6 +114,57 @@ mod imp {
         }
     }
 
+    /// The time the other robots get between the conductor's start and bar one, µs: to hear
+    /// of the start and send their first notes early.
+    const LEADER_LEAD_US: i64 = 1_000_000;
+
+    /// A conductor's performance leading the session (`orch conduct --link`).
+    pub struct Leader(Leading);
+
+    /// Joins the session and starts it for the performance that `control` steers (its
+    /// clock's zero at `origin`), `song` from its top: bar one is the first bar line a second
+    /// from now, where the performance starts; its tempo and phase are published from then
+    /// on, and the session stops when [`Leader::end`] is called. Listens for a session
+    /// first ([`DISCOVERY`]), so that it leads the one on the network, not one of its own.
+    pub fn lead(song: &Song, control: &Arc<Control>, origin: Instant) -> anyhow::Result<Leader> {
+        let quantum = quantum(song);
+        let beats = ScoreBeats::of(song);
+        let bpm = 60e6 / beats.at(0).1;
+        let session = Arc::new(Session::join(bpm));
+        std::thread::sleep(DISCOVERY);
+        let (at, bar_one) = session.start_leading(bpm, LEADER_LEAD_US, quantum);
+        let (host, wall) = session.now_pair(origin);
+        control.start_at(WallTime::from_signed(at - host + wall));
+        eprintln!(
+            "orch: --link: started the Link session ({} other peers) at {bpm:.1} BPM; bar one in \
+             {} ms",
+            session.peers(),
+            (at - host) / 1000
+        );
+        let lead = Lead::new(beats, quantum, bar_one);
+        Ok(Leader(orch_link::session::lead(
+            session,
+            Arc::clone(control),
+            origin,
+            lead,
+            quantum,
+        )))
+    }
+
+    impl Leader {
+        /// The performance ended: stop the session (every robot stops), and say so.
+        pub fn end(self) {
+            let led = self.0.finish();
+            eprintln!("orch: --link: stopped the Link session");
+            tracing::debug!(
+                "--link: {} tempos published, {} beats forced, {} announcements",
+                led.tempos,
+                led.beats,
+                led.announced
+            );
+        }
+    }
+
     /// The follower, running.
     pub struct Followed(Following);
 
@@ -136,16 +187,28 @@ mod imp {
 
 /// `--link` without the `link` feature: said so, with how to build it and what that means.
 #[cfg(not(feature = "link"))]
+fn without_the_feature() -> anyhow::Error {
+    crate::error::bad_input(
+        "--link: this orch was built without the `link` feature (Ableton Link, through \
+         Ableton's GPL-2.0-or-later SDK: a binary built with it is distributed under the \
+         GPL); build it with `cargo build --release --features link` (needs cmake and \
+         libclang-dev)",
+    )
+}
+
+/// `orch play --link` without the `link` feature: refused ([`without_the_feature`]).
+#[cfg(not(feature = "link"))]
 pub fn join(
     _: &Song,
     _: &orch_perform::Setup,
     _: bool,
     _: &std::sync::atomic::AtomicBool,
 ) -> anyhow::Result<Option<Joined>> {
-    Err(crate::error::bad_input(
-        "--link: this orch was built without the `link` feature (Ableton Link, through \
-         Ableton's GPL-2.0-or-later SDK: a binary built with it is distributed under the \
-         GPL); build it with `cargo build --release --features link` (needs cmake and \
-         libclang-dev)",
-    ))
+    Err(without_the_feature())
+}
+
+/// `orch conduct --link` without the `link` feature: refused ([`without_the_feature`]).
+#[cfg(not(feature = "link"))]
+pub fn lead(_: &Song, _: &Arc<Control>, _: Instant) -> anyhow::Result<()> {
+    Err(without_the_feature())
 }

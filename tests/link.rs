@@ -43,8 +43,14 @@ fn ip(args: &[&str]) {
     );
 }
 
-/// A bridge and `hosts` namespaces on it, 10.77.0.10 + i/24; taken down when dropped.
+/// A bridge and `hosts` namespaces on it, 10.77.N.10 + i/24 (N the test's own); taken down
+/// when dropped.
 struct Net {
+    /// One net at a time: each plays in real time with several processes, on a machine that
+    /// may have two cores.
+    _serial: std::sync::MutexGuard<'static, ()>,
+    /// 10.77.`subnet`.0/24: each test's own.
+    subnet: u32,
     bridge: String,
     hosts: Vec<String>,
 }
@@ -58,8 +64,13 @@ impl Net {
         static NETS: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
         let n = NETS.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
         let tag = std::process::id() % 10_000 * 10 + n;
+        // Each test's subnet its own, and (likely) each process's: 10.77.S.0/24.
+        let subnet = std::process::id() % 50 * 5 + n;
         let bridge = format!("orchbr{tag}");
+        static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
         let net = Net {
+            _serial: SERIAL.lock().unwrap_or_else(|e| e.into_inner()),
+            subnet,
             bridge: bridge.clone(),
             hosts: (0..hosts).map(|i| format!("orchl{tag}-{i}")).collect(),
         };
@@ -73,6 +84,14 @@ impl Net {
             "0",
         ]);
         ip(&["link", "set", &bridge, "up"]);
+        // The test itself (a conductor's OSC) reaches the hosts from 10.77.S.1.
+        ip(&[
+            "addr",
+            "add",
+            &format!("10.77.{subnet}.1/24"),
+            "dev",
+            &bridge,
+        ]);
         for (i, ns) in net.hosts.iter().enumerate() {
             let veth = format!("ol{tag}v{i}");
             ip(&["netns", "add", ns]);
@@ -80,7 +99,7 @@ impl Net {
                 "link", "add", &veth, "type", "veth", "peer", "name", "eth0", "netns", ns,
             ]);
             ip(&["link", "set", &veth, "master", &bridge, "up"]);
-            let addr = format!("{}/24", Net::addr(i));
+            let addr = format!("{}/24", net.addr(i));
             ip(&["-n", ns, "addr", "add", &addr, "dev", "eth0"]);
             ip(&["-n", ns, "link", "set", "eth0", "up"]);
             ip(&["-n", ns, "link", "set", "lo", "up"]);
@@ -89,8 +108,8 @@ impl Net {
         net
     }
 
-    fn addr(i: usize) -> String {
-        format!("10.77.0.{}", 10 + i)
+    fn addr(&self, i: usize) -> String {
+        format!("10.77.{}.{}", self.subnet, 10 + i)
     }
 
     /// Host `i` loses one in `every` of its Link datagrams, in and out (UDP but the robots'
@@ -152,7 +171,7 @@ struct Peer {
 
 impl Peer {
     fn start(net: &Net, host: usize, ports: usize) -> Peer {
-        let addr = Net::addr(host);
+        let addr = net.addr(host);
         let ports = ports.to_string();
         let mut child = net
             .command(host, "python3", &[PEER, &addr, "9001", &ports])
@@ -221,14 +240,14 @@ fn robot(net: &Net, host: usize, file: &str, port: u16) -> Child {
 
 /// [`robot`] with `more` arguments.
 fn robot_with(net: &Net, host: usize, file: &str, port: u16, more: &[&str]) -> Child {
-    let mut args = robot_args(file, port, more);
+    let mut args = robot_args(net, file, port, more);
     args.push("--no-compensation".into());
     spawn(args, |args| net.command(host, ORCH, args))
 }
 
 /// `orch play FILE --link` to the collector's port `port`, with `more`.
-fn robot_args(file: &str, port: u16, more: &[&str]) -> Vec<String> {
-    let out = format!("udp:{}:{port}", Net::addr(0));
+fn robot_args(net: &Net, file: &str, port: u16, more: &[&str]) -> Vec<String> {
+    let out = format!("udp:{}:{port}", net.addr(0));
     let mut args: Vec<String> = ["play", file, "--link", "--no-view", "--json", "--out", &out]
         .map(String::from)
         .to_vec();
@@ -323,7 +342,7 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
         .map(|i| robot(&net, i, file, 9000 + i as u16))
         .collect();
     // A fifth robot sends each note early by its own mechanics, as robots do.
-    let compensated = spawn(robot_args(file, 9005, &[]), |args| {
+    let compensated = spawn(robot_args(&net, file, 9005, &[]), |args| {
         net.command(5, ORCH, args)
     });
     peer.wait_peers(4);
@@ -535,4 +554,104 @@ fn a_robot_with_start_starts_the_session_and_comes_in_on_bar_one() {
     // A second to listen, at least 300 ms of lead-in, and at most a bar (2 s) to its line.
     assert!((1_300.0..4_000.0).contains(&first_ms), "{first_ms}");
     let _ = std::fs::remove_file(file);
+}
+
+/// `orch conduct --link` leads the session: it starts it for bar one, where its own
+/// performance starts, and publishes the tempo its conductor gives (here OSC tempo
+/// statements), so robots waiting on other hosts come in with it and follow; when its
+/// performance ends the session stops, and so do they.
+#[test]
+fn a_conductor_leads_robots_on_other_hosts() {
+    let net = Net::new(4);
+    let dir = std::env::temp_dir();
+    let short = dir.join(format!("orch-link-{}-c24.mid", std::process::id()));
+    let long = dir.join(format!("orch-link-{}-c400.mid", std::process::id()));
+    std::fs::write(&short, testkit::smf::quarters_smf(24, 120.0)).unwrap();
+    std::fs::write(&long, testkit::smf::quarters_smf(400, 120.0)).unwrap();
+    let mut peer = Peer::start(&net, 0, 3);
+    std::thread::sleep(Duration::from_millis(1_500));
+    let robots: Vec<Child> = (2..=3)
+        .map(|i| robot(&net, i, long.to_str().unwrap(), 9000 + i as u16))
+        .collect();
+    peer.wait_peers(2);
+    let osc_at = format!("{}:9100", net.addr(1));
+    let source = format!("osc:{osc_at}");
+    let mut args = robot_args(&net, short.to_str().unwrap(), 9001, &["--source", &source]);
+    args[0] = "conduct".into();
+    args.retain(|a| a != "--link");
+    args.extend(["--link".into(), "--no-compensation".into()]);
+    let conductor = spawn(args, |a| net.command(1, ORCH, a));
+    // A second listening, then bar one a second or two later; then 150 BPM, then 100.
+    std::thread::sleep(Duration::from_secs(5));
+    let osc = std::net::UdpSocket::bind(format!("10.77.{}.1:0", net.subnet)).unwrap();
+    let mut tempo = |bpm: f32| {
+        let m = orch_perform::conduct::encode_osc(
+            "/orch/tempo",
+            &[orch_perform::conduct::OscArg::Float(bpm)],
+        );
+        osc.send_to(&m, &osc_at).unwrap();
+        peer.ask("now")[0]
+    };
+    let fast_at = tempo(150.0);
+    std::thread::sleep(Duration::from_secs(3));
+    let slow_at = tempo(100.0);
+    let conductor = exited(conductor, Duration::from_secs(20));
+    let err = String::from_utf8_lossy(&conductor.stderr);
+    assert!(conductor.status.success(), "{err}");
+    assert!(err.contains("stopped the Link session"), "{err}");
+    for r in robots {
+        let out = exited(r, Duration::from_secs(10));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("the session stopped"), "{err}");
+    }
+    let all = onsets(&peer.report());
+    let by = |r: usize| {
+        all.iter()
+            .filter(|o| o.robot == r)
+            .copied()
+            .collect::<Vec<_>>()
+    };
+    // The conductor played its 24 quarters; the robots with it, on the same beats, the same
+    // quarter of the score, and stopped with it.
+    assert_eq!(by(0).len(), 24);
+    let first = by(0)[0].beat.round();
+    for o in &all {
+        assert!(o.off_ms().abs() < ON_BEAT_MS, "{o:?}");
+        let quarter = (o.beat.round() - first) as i64;
+        assert_eq!(i64::from(o.note) - 48, quarter.rem_euclid(24), "{o:?}");
+    }
+    for r in 1..=2 {
+        assert_eq!(
+            by(r)[0].beat.round(),
+            first,
+            "robot {r} came in with the conductor"
+        );
+        assert!(by(r).len() >= 23, "robot {r}: {} notes", by(r).len());
+    }
+    // Each tempo followed by every robot within a beat.
+    for r in 0..=2 {
+        let gaps = |from: f64, to: f64| {
+            let notes: Vec<Onset> = by(r)
+                .into_iter()
+                .filter(|o| o.host_us > from && o.host_us < to)
+                .collect();
+            notes
+                .windows(2)
+                .map(|w| (w[1].host_us - w[0].host_us) / 1e3)
+                .collect::<Vec<_>>()
+        };
+        for (gap, from, to) in [
+            (400.0, fast_at + 400e3, slow_at),
+            (600.0, slow_at + 600e3, f64::MAX),
+        ] {
+            let g = gaps(from, to);
+            assert!(g.len() >= 3, "robot {r}: {g:?}");
+            assert!(
+                g.iter().all(|x| (x - gap).abs() < ON_BEAT_MS),
+                "robot {r}: {g:?}"
+            );
+        }
+    }
+    let _ = std::fs::remove_file(short);
+    let _ = std::fs::remove_file(long);
 }

@@ -6,7 +6,9 @@
 //! and stop. An orch robot joins as one more peer. A score quarter note is one session beat;
 //! every robot comes in on one bar line ([`entry()`]); each look at the session
 //! ([`Steer::step`]) keeps the performance on the beat, through the file's own tempo map;
-//! the session stopping stops the robot, every key up.
+//! the session stopping stops the robot, every key up. A performance that follows a
+//! conductor can lead the session instead ([`Lead`]): robots on other hosts then follow the
+//! one conductor.
 //!
 //! This crate's own code is pure: it reads a [`Timeline`] (the session as one host sees it)
 //! and says what the performance must do. The session itself is the `abl` feature's
@@ -34,11 +36,13 @@
 #![forbid(unsafe_code)]
 
 pub mod entry;
+pub mod lead;
 #[cfg(feature = "abl")]
 pub mod session;
 pub mod steer;
 pub mod timeline;
 
 pub use entry::{bar_one, entry, Entry, LEAD_IN_US};
+pub use lead::{bar_line_after, Lead, Publish};
 pub use steer::{Steer, Step, HORIZON_US, JUMP_QUARTERS, SLACK};
 pub use timeline::{Line, Timeline};

@@ -25,8 +25,10 @@ use std::time::{Duration, Instant};
 use orch_perform::Control;
 use rusty_link::{AblLink, SessionState};
 
+use crate::lead::{bar_line_after, Lead, Publish};
 use crate::steer::{Steer, Step};
 use crate::timeline::Timeline;
+use crate::LEAD_IN_US;
 
 /// How often the session is looked at, while waiting and while following.
 pub const LOOK_EVERY: Duration = Duration::from_millis(2);
@@ -35,6 +37,10 @@ pub const LOOK_EVERY: Duration = Duration::from_millis(2);
 pub const ANNOUNCEMENTS: u32 = 3;
 /// See [`ANNOUNCEMENTS`].
 pub const ANNOUNCE_EVERY: Duration = Duration::from_millis(500);
+
+/// How long a leader's session stays open after it stopped the session, for the news to go
+/// out before the process may end (seen: without it, robots on other hosts played on).
+pub const STOP_LINGER: Duration = Duration::from_millis(500);
 
 /// How long a peer listens for a session before `--start` starts one: Link's discovery
 /// answers within a few hundred ms on a LAN.
@@ -117,6 +123,27 @@ impl Session {
         self.commit(|s, now| s.set_tempo(bpm, now));
     }
 
+    /// Starts the session for a performance that leads it (see [`lead`]): at `bpm`, playing
+    /// from the first bar line at least `lead_us` from now, so that every peer finds that bar
+    /// line for bar one ([`bar_one`](crate::bar_one)). Returns that bar line, host µs and
+    /// beat.
+    pub fn start_leading(&self, bpm: f64, lead_us: i64, quantum: f64) -> (i64, f64) {
+        self.set_tempo(bpm);
+        let now = self.host_us();
+        let (at, beat) = bar_line_after(&self.capture(), now, lead_us, quantum);
+        self.commit(|s, _| s.set_is_playing(true, at - LEAD_IN_US - 1_000));
+        (at, beat)
+    }
+
+    /// Forces the session's beat to `beat` at host time `at`, at `bpm`: a leader's
+    /// correction (every peer's beat moves).
+    pub fn force_beat(&self, bpm: f64, beat: f64, at: i64, quantum: f64) {
+        self.commit(|s, _| {
+            s.set_tempo(bpm, at);
+            s.force_beat_at_time(beat, at, quantum);
+        });
+    }
+
     /// Says again that the session plays, since the moment it began (see the [module
     /// notes](self)); nothing if it does not play.
     pub fn announce(&self) {
@@ -177,6 +204,40 @@ impl FetchNeg for std::sync::atomic::AtomicI64 {
     }
 }
 
+/// Tells each newcomer that the session plays: [`ANNOUNCEMENTS`] times, [`ANNOUNCE_EVERY`]
+/// apart, in case one is lost.
+struct Announcer {
+    peers: u64,
+    to_announce: u32,
+    announced_at: Instant,
+}
+
+impl Announcer {
+    fn new(session: &Session) -> Self {
+        Self {
+            peers: session.peers(),
+            to_announce: 0,
+            announced_at: Instant::now(),
+        }
+    }
+
+    /// Announces if a newcomer is owed one now: the announcements made (0 or 1).
+    fn look(&mut self, session: &Session) -> u64 {
+        let peers = session.peers();
+        if peers > self.peers {
+            self.to_announce = ANNOUNCEMENTS;
+        }
+        self.peers = peers;
+        if self.to_announce == 0 || self.announced_at.elapsed() < ANNOUNCE_EVERY {
+            return 0;
+        }
+        session.announce();
+        self.to_announce -= 1;
+        self.announced_at = Instant::now();
+        1
+    }
+}
+
 /// What following the session did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Followed {
@@ -217,23 +278,10 @@ pub fn follow(
     let flag = Arc::clone(&done);
     let thread = thread::spawn(move || {
         let mut followed = Followed::default();
-        let mut peers = session.peers();
-        // Announcements still to make, and when the last was: a newcomer is told three
-        // times, half a second apart, in case one is lost.
-        let (mut to_announce, mut announced_at) = (0, Instant::now());
+        let mut announcer = Announcer::new(&session);
         while !flag.load(Ordering::SeqCst) && !control.stopping() {
             thread::sleep(LOOK_EVERY);
-            let now_peers = session.peers();
-            if now_peers > peers {
-                to_announce = ANNOUNCEMENTS;
-            }
-            peers = now_peers;
-            if to_announce > 0 && announced_at.elapsed() >= ANNOUNCE_EVERY {
-                session.announce();
-                followed.announced += 1;
-                to_announce -= 1;
-                announced_at = Instant::now();
-            }
+            followed.announced += announcer.look(&session);
             let Some(map) = control.time_map() else {
                 continue;
             };
@@ -258,4 +306,74 @@ pub fn follow(
         followed
     });
     Following { done, thread }
+}
+
+/// What leading the session did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Led {
+    /// Tempos published.
+    pub tempos: u64,
+    /// Beats forced.
+    pub beats: u64,
+    /// Announcements to newcomers.
+    pub announced: u64,
+}
+
+/// A thread telling the session where a performance stands. [`finish`](Self::finish) ends it
+/// and stops the session.
+pub struct Leading {
+    done: Arc<AtomicBool>,
+    thread: JoinHandle<Led>,
+}
+
+impl Leading {
+    /// Ends the leading (the performance ended) and stops the session: every robot stops.
+    pub fn finish(self) -> Led {
+        self.done.store(true, Ordering::SeqCst);
+        self.thread.join().unwrap_or_default()
+    }
+}
+
+/// Publishes the tempo and phase of the performance that `control` steers (its clock's zero
+/// at `origin`) to the session as `lead` says, every [`LOOK_EVERY`], until
+/// [`Leading::finish`]; then stops the session. Announces the session to each newcomer.
+pub fn lead(
+    session: Arc<Session>,
+    control: Arc<Control>,
+    origin: Instant,
+    lead: Lead,
+    quantum: f64,
+) -> Leading {
+    let done = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&done);
+    let thread = thread::spawn(move || {
+        let mut led = Led::default();
+        let mut announcer = Announcer::new(&session);
+        while !flag.load(Ordering::SeqCst) {
+            thread::sleep(LOOK_EVERY);
+            led.announced += announcer.look(&session);
+            let Some(map) = control.time_map() else {
+                continue;
+            };
+            let timeline = session.capture();
+            let (host, wall) = session.now_pair(origin);
+            match lead.step(&timeline, host, wall, &map) {
+                Publish::Nothing => {}
+                Publish::Tempo(bpm) => {
+                    session.commit(|s, _| s.set_tempo(bpm, host));
+                    led.tempos += 1;
+                }
+                Publish::Beat(bpm, beat) => {
+                    session.force_beat(bpm, beat, host, quantum);
+                    led.beats += 1;
+                }
+            }
+        }
+        session.stop();
+        // The SDK sends the change from a thread of its own: the session stays open a moment
+        // so the news leaves before the process may end.
+        thread::sleep(STOP_LINGER);
+        led
+    });
+    Leading { done, thread }
 }
