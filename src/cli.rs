@@ -69,6 +69,10 @@ pub struct ServeArgs {
     /// Log what the outputs do on standard error; without it only warnings.
     #[arg(long, short)]
     pub verbose: bool,
+    /// Show and steer the Ableton Link session on the network on the page (built with the
+    /// `link` feature): its peers and tempo, and Start, Stop and a tempo for it.
+    #[arg(long)]
+    pub link: bool,
 }
 
 #[derive(Args, Debug)]

@@ -33,7 +33,7 @@ pub fn quantum(song: &Song) -> f64 {
 }
 
 #[cfg(feature = "link")]
-pub use imp::{join, lead, Leader};
+pub use imp::{join, lead, page_session, Leader};
 
 #[cfg(feature = "link")]
 mod imp {
@@ -165,6 +165,37 @@ mod imp {
         }
     }
 
+    /// The session as `orch serve`'s page shows and steers it.
+    struct PageSession(Session);
+
+    impl orch_serve::Session for PageSession {
+        fn status(&self) -> orch_serve::SessionStatus {
+            let t = self.0.capture();
+            orch_serve::SessionStatus {
+                peers: self.0.peers(),
+                bpm: t.tempo(),
+                playing: t.is_playing(),
+            }
+        }
+
+        fn start(&self) {
+            self.0.start();
+        }
+
+        fn stop(&self) {
+            self.0.stop();
+        }
+
+        fn set_tempo(&self, bpm: f64) {
+            self.0.set_tempo(bpm);
+        }
+    }
+
+    /// Joins the session for `orch serve --link`'s page.
+    pub fn page_session() -> anyhow::Result<Arc<dyn orch_serve::Session>> {
+        Ok(Arc::new(PageSession(Session::join(120.0))))
+    }
+
     /// The follower, running.
     pub struct Followed(Following);
 
@@ -210,5 +241,11 @@ pub fn join(
 /// `orch conduct --link` without the `link` feature: refused ([`without_the_feature`]).
 #[cfg(not(feature = "link"))]
 pub fn lead(_: &Song, _: &Arc<Control>, _: Instant) -> anyhow::Result<()> {
+    Err(without_the_feature())
+}
+
+/// `orch serve --link` without the `link` feature: refused ([`without_the_feature`]).
+#[cfg(not(feature = "link"))]
+pub fn page_session() -> anyhow::Result<Arc<dyn orch_serve::Session>> {
     Err(without_the_feature())
 }

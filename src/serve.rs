@@ -19,6 +19,10 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let outs = out_specs(&args.outs)?;
     orch_serve::check(&setup, &outs, args.library.as_deref())
         .map_err(|e| lift(e, ServeError::is_bad_input))?;
+    let session = match args.link {
+        true => Some(crate::link::page_session()?),
+        false => None,
+    };
     let signalled = orch_stage::signals::stop_flag()?;
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
@@ -37,6 +41,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
             named: !args.outs.is_empty(),
             library: args.library.clone(),
             access,
+            session,
         };
         orch_serve::serve(listener, config, orch_serve::until_set(signalled))
             .await

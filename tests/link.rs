@@ -655,3 +655,95 @@ fn a_conductor_leads_robots_on_other_hosts() {
     let _ = std::fs::remove_file(short);
     let _ = std::fs::remove_file(long);
 }
+
+/// `curl` in host `host`'s namespace: the status and body of `method path` (with `body`) on
+/// `orch serve` there.
+fn curl(net: &Net, host: usize, port: u16, method: &str, body: Option<&str>) -> (u16, Value) {
+    let url = format!("http://127.0.0.1:{port}/api/session");
+    let mut args = vec![
+        "-s",
+        "-o",
+        "-",
+        "-w",
+        "\n%{http_code}",
+        "-X",
+        method,
+        url.as_str(),
+    ];
+    if let Some(b) = body {
+        args.extend(["-H", "Content-Type: application/json", "--data", b]);
+    }
+    let out = net.command(host, "curl", &args).output().expect("curl");
+    let text = String::from_utf8_lossy(&out.stdout);
+    let (json, code) = text.rsplit_once('\n').unwrap();
+    (
+        code.parse().unwrap(),
+        serde_json::from_str(json).unwrap_or(Value::Null),
+    )
+}
+
+/// `orch serve --link`: the page's API shows the session (peers, tempo, playing) and starts,
+/// stops and sets the tempo of it, as an independent peer sees; a tempo out of Link's range
+/// is refused and changes nothing.
+#[test]
+fn the_web_page_shows_and_steers_the_session() {
+    let net = Net::new(2);
+    let mut peer = Peer::start(&net, 0, 1);
+    std::thread::sleep(Duration::from_millis(1_500));
+    let mut serve = net
+        .command(1, ORCH, &["serve", "--link", "--listen", "127.0.0.1:8790"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("orch serve");
+    let mut first = String::new();
+    BufReader::new(serve.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    assert!(first.contains("the page is at"), "{first}");
+    peer.wait_peers(1);
+    let until = Instant::now() + Duration::from_secs(10);
+    let shown = loop {
+        let (code, s) = curl(&net, 1, 8790, "GET", None);
+        assert_eq!(code, 200, "{s}");
+        if s["peers"] == 1 && s["bpm"].as_f64().is_some_and(|b| (b - 100.0).abs() < 0.01) {
+            break s;
+        }
+        assert!(
+            Instant::now() < until,
+            "the page never showed the session: {s}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    assert_eq!(shown["playing"], false);
+    let settle = || std::thread::sleep(Duration::from_millis(500));
+    let (code, s) = curl(&net, 1, 8790, "POST", Some(r#"{"start": true}"#));
+    assert_eq!((code, &s["playing"]), (200, &Value::Bool(true)));
+    settle();
+    assert_eq!(peer.ask("now")[3], 1.0, "the independent peer sees it play");
+    curl(&net, 1, 8790, "POST", Some(r#"{"bpm": 140}"#));
+    settle();
+    // Link sends a tempo as µs a beat: 140 BPM arrives as 140.00014.
+    let near = |a: f64, b: f64| (a - b).abs() < 0.01;
+    assert!(near(peer.ask("now")[2], 140.0));
+    peer.ask("tempo 90");
+    settle();
+    let shown = curl(&net, 1, 8790, "GET", None).1["bpm"].as_f64().unwrap();
+    assert!(near(shown, 90.0), "{shown}");
+    let (code, s) = curl(&net, 1, 8790, "POST", Some(r#"{"bpm": 5}"#));
+    assert_eq!(code, 400, "{s}");
+    let (code, _) = curl(
+        &net,
+        1,
+        8790,
+        "POST",
+        Some(r#"{"start": true, "stop": true}"#),
+    );
+    assert_eq!(code, 400);
+    curl(&net, 1, 8790, "POST", Some(r#"{"stop": true}"#));
+    settle();
+    let now = peer.ask("now");
+    assert!(near(now[2], 90.0) && now[3] == 0.0, "{now:?}");
+    let _ = serve.kill();
+    let _ = serve.wait();
+}

@@ -96,7 +96,8 @@ def main():
             print("unknown command", words[0], flush=True)
             continue
         state = session.captureAppSessionState()
-        print("ok", now, state.beatAtTime(now, QUANTUM), state.tempo(), flush=True)
+        print("ok", now, state.beatAtTime(now, QUANTUM), state.tempo(),
+              int(state.isPlaying()), flush=True)
 
 
 main()

@@ -270,6 +270,32 @@ function connect() {
   };
 }
 
+// A shared Link session (orch serve --link): its peers, tempo and start/stop, looked at
+// every second; the section stays hidden on a server without one.
+function showSession(s) {
+  $("session-section").hidden = false;
+  const others = s.peers === 1 ? "1 other peer" : `${s.peers} other peers`;
+  $("session-line").textContent = `${s.playing ? "Playing" : "Stopped"} at ${s.bpm.toFixed(1)} BPM, ${others}`;
+  if (document.activeElement !== $("session-bpm")) $("session-bpm").value = s.bpm.toFixed(1);
+}
+
+async function session(body) {
+  try {
+    const s = body === undefined ? await api("GET", "/api/session") : await api("POST", "/api/session", body);
+    showSession(s);
+    if (body !== undefined) showError("");
+    return true;
+  } catch (e) {
+    if (body !== undefined) showError(e.message);
+    return false;
+  }
+}
+
+async function watchSession() {
+  if (!(await session())) return;
+  setInterval(() => session(), 1000);
+}
+
 function jumpTo(bar) {
   if (!Number.isInteger(bar) || bar < 1) {
     showError("give a bar number, from 1");
@@ -295,6 +321,10 @@ document.addEventListener("DOMContentLoaded", () => {
     const g = e.target.closest && e.target.closest("g.bar");
     if (g) jumpTo(Number(g.dataset.bar));
   };
+  $("session-start").onclick = () => session({ start: true });
+  $("session-stop").onclick = () => session({ stop: true });
+  $("session-bpm").onchange = () => session({ bpm: Number($("session-bpm").value) });
   loadLibrary();
+  watchSession();
   connect();
 });

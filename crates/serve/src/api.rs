@@ -13,6 +13,7 @@
 //! | `POST /api/command` | a command, JSON ([`Command`]) | `{"state": STATE}` once the performance shows it |
 //! | `GET /api/ended` | | the last performance's report, with its note-by-note account and clock |
 //! | `GET /api/ws` | a WebSocket upgrade | the state at once, then each change (at most 30 a second) |
+//! | `GET`, `POST /api/session` | | a shared session's state, and its start, stop and tempo ([`crate::session`]) |
 //!
 //! A song is `{"id", "name", "bars", "seconds", "analysis", "text", "roll"}`: `analysis` is
 //! what `orch analyze --json` prints, `text` what `orch analyze` prints. A request refused
@@ -69,6 +70,7 @@ pub fn router(player: Arc<Player>) -> Router {
         .route("/api/command", post(command))
         .route("/api/ended", get(ended))
         .route("/api/ws", get(ws))
+        .route("/api/session", get(session).post(steer_session))
         .layer(DefaultBodyLimit::max(MAX_UPLOAD))
         .layer(axum::middleware::from_fn_with_state(
             access,
@@ -254,6 +256,33 @@ async fn command(
     match blocking(move || p.command(command)).await {
         Ok(state) => Json(serde_json::json!({ "state": state })).into_response(),
         Err((status, why)) => refuse(status, why),
+    }
+}
+
+/// What a session request gets from a server without one.
+const NO_SESSION: &str = "no shared session: the server was not started with --link";
+
+async fn session(State(p): State<Arc<Player>>) -> Response {
+    match p.session() {
+        Some(s) => Json(s.status()).into_response(),
+        None => refuse(StatusCode::NOT_FOUND, NO_SESSION),
+    }
+}
+
+async fn steer_session(
+    State(p): State<Arc<Player>>,
+    body: Result<Json<crate::SessionCommand>, JsonRejection>,
+) -> Response {
+    let command = match json_body(body) {
+        Ok(c) => c,
+        Err((status, why)) => return refuse(status, why),
+    };
+    let Some(session) = p.session() else {
+        return refuse(StatusCode::NOT_FOUND, NO_SESSION);
+    };
+    match command.apply(session) {
+        Ok(status) => Json(status).into_response(),
+        Err(why) => refuse(StatusCode::BAD_REQUEST, why),
     }
 }
 

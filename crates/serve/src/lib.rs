@@ -30,6 +30,7 @@
 pub mod api;
 pub mod guard;
 pub mod player;
+pub mod session;
 
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
@@ -43,6 +44,7 @@ use orch_robot::Robot;
 use orch_seq::Song;
 
 pub use guard::Access;
+pub use session::{Session, SessionCommand, SessionStatus};
 
 /// The largest upload taken: 16 MiB (larger gets 413 Payload Too Large).
 pub const MAX_UPLOAD: usize = 16 << 20;
@@ -110,6 +112,8 @@ pub struct Config {
     pub library: Option<PathBuf>,
     /// Who may come in (the address listened on, the token).
     pub access: Access,
+    /// A shared session the page shows and steers (`orch serve --link`), if any.
+    pub session: Option<Arc<dyn Session>>,
 }
 
 /// Why the server could not run, or start.

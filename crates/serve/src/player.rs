@@ -188,6 +188,7 @@ pub struct Player {
     named: bool,
     library: Option<PathBuf>,
     access: crate::Access,
+    session: Option<Arc<dyn crate::Session>>,
     inner: Mutex<Inner>,
     /// One song analysed at a time: uploads wait their turn rather than each holding a
     /// 16 MiB file's analysis in memory at once.
@@ -198,6 +199,11 @@ pub struct Player {
 
 impl Player {
     /// A player of `config`, nothing loaded.
+    /// The shared session the page shows and steers, if any (`orch serve --link`).
+    pub fn session(&self) -> Option<&dyn crate::Session> {
+        self.session.as_deref()
+    }
+
     pub fn new(config: Config) -> Arc<Self> {
         let tempo = config.setup.tempo.get();
         Arc::new(Self {
@@ -207,6 +213,7 @@ impl Player {
             named: config.named,
             library: config.library,
             access: config.access,
+            session: config.session,
             inner: Mutex::new(Inner {
                 songs: Vec::new(),
                 next_id: 1,
