@@ -352,7 +352,15 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
     std::thread::sleep(Duration::from_secs(3));
     let joined_at = peer.ask("now")[0];
     robots.push(robot(&net, 4, file, 9004));
-    std::thread::sleep(Duration::from_secs(8));
+    std::thread::sleep(Duration::from_secs(5));
+    // The first robot leaves (SIGTERM: every key up, the report); nobody else notices.
+    let left_at = peer.ask("now")[0];
+    let killed = Command::new("kill")
+        .args(["-TERM", &robots[0].id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    std::thread::sleep(Duration::from_secs(3));
     let stopped = peer.ask("stop");
     let stop_us = stopped[0];
     let compensated = exited(compensated, Duration::from_secs(10));
@@ -363,8 +371,10 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
         let out = exited(r, Duration::from_secs(10));
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(out.status.success(), "robot {}: {err}", i + 1);
-        assert!(
+        // The one that left did not wait for the session to stop.
+        assert_eq!(
             err.contains("the session stopped"),
+            i > 0,
             "robot {}: {err}",
             i + 1
         );
@@ -468,9 +478,24 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
     // Joining changed nobody's tempo.
     assert_eq!(peer.ask("tempo 130")[2], 130.0);
 
+    // The robot that left let every key go as it left; the others played on, on the beat
+    // (above), three of them to the stop.
+    let last_of = |r: usize| report.iter().rfind(|m| m["peer"] == r).unwrap();
+    let left_ms = (last_of(0)["host_us"].as_f64().unwrap() - left_at) / 1e3;
+    assert!(
+        (0.0..500.0).contains(&left_ms),
+        "it let go {left_ms:.0} ms after it was told to leave"
+    );
+    for r in 1..4 {
+        assert!(
+            by(r).iter().filter(|o| o.host_us > left_at + 1e6).count() >= 4,
+            "robot {r}"
+        );
+    }
+
     // The stop: every robot's last message is an All Notes Off or All Sound Off, soon after.
     for r in 0..5 {
-        let last = report.iter().rfind(|m| m["peer"] == r).unwrap();
+        let last = last_of(r);
         let b: Vec<u64> = last["bytes"]
             .as_array()
             .unwrap()
@@ -484,7 +509,7 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
         );
         let after_ms = (last["host_us"].as_f64().unwrap() - stop_us) / 1e3;
         assert!(
-            after_ms < 500.0,
+            r == 0 || after_ms < 500.0,
             "robot {} stopped {after_ms:.0} ms after",
             r + 1
         );
