@@ -5,14 +5,9 @@
 //! pass by replaying nothing, and checks that the good `.toml` seeds are accepted and the
 //! `bad-*` ones refused, so both paths of the reader stay covered.
 
-#[path = "../fuzz/check_robot_toml.rs"]
-mod check_robot_toml;
-
-#[path = "../fuzz/replay.rs"]
-mod replay_support;
-
-use replay_support::{inputs, replay};
 use std::path::{Path, PathBuf};
+use testkit::fuzz::replay::{inputs, replay};
+use testkit::fuzz::robot_toml as check_robot_toml;
 
 fn fuzz_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz")

@@ -1,17 +1,12 @@
 //! Guards that what the fuzzer learned stays learned: replays every input of
 //! `fuzz/corpus/interpret/` (the seeds) and `fuzz/regressions/interpret/` (crashes the fuzzer
-//! found) through the fuzz target's own checks, `fuzz/check.rs`, on stable Rust, as part of
+//! found) through the fuzz target's own checks (testkit's `fuzz::interpret`), on stable Rust, as part of
 //! `cargo test -p orch-core`. Fails if the corpus is missing or empty, so it cannot pass by
 //! replaying nothing.
 
-#[path = "../../../fuzz/check.rs"]
-mod check;
-
-#[path = "../../../fuzz/replay.rs"]
-mod replay_support;
-
-use replay_support::{inputs, replay};
 use std::path::{Path, PathBuf};
+use testkit::fuzz::interpret as check;
+use testkit::fuzz::replay::{inputs, replay};
 
 fn fuzz_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz")

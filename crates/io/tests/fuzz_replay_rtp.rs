@@ -1,18 +1,13 @@
 //! Guards that what the `rtp_packet` fuzzer learned stays learned: replays every input of
 //! `fuzz/corpus/rtp_packet/` (the seeds) and `fuzz/regressions/rtp_packet/` through the fuzz
-//! target's own checks, `fuzz/check_rtp.rs`, on stable Rust. Fails if the corpus is thin, so
+//! target's own checks, testkit's `fuzz::rtp`, on stable Rust. Fails if the corpus is thin, so
 //! it cannot pass by replaying nothing, and checks that the seeds named `bad-*` are refused
 //! and the others read, so both paths of the readers stay covered.
 
-#[path = "../../../fuzz/check_rtp.rs"]
-mod check_rtp;
-
-#[path = "../../../fuzz/replay.rs"]
-mod replay_support;
-
 use orch_io::rtp::{control, journal, packet};
-use replay_support::{inputs, replay};
 use std::path::{Path, PathBuf};
+use testkit::fuzz::replay::{inputs, replay};
+use testkit::fuzz::rtp as check_rtp;
 
 fn fuzz_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz")

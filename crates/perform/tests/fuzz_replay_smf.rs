@@ -1,18 +1,13 @@
 //! Guards that what the `smf` fuzzer learned stays learned: replays every input of
 //! `fuzz/corpus/smf/` (the seeds) and `fuzz/regressions/smf/` (crashes the fuzzer found)
-//! through the fuzz target's own checks, `fuzz/check_smf.rs`, on stable Rust, as part of
+//! through the fuzz target's own checks, testkit's `fuzz::smf`, on stable Rust, as part of
 //! `cargo test -p orch-perform` (the checks run orch-seq's reader and this crate's planner). Fails if the corpus is missing or thin, so it cannot pass by
 //! replaying nothing, and checks that the whole seeds parse (so the plan checks run) and
 //! the damaged ones (`bad-*`, `cut-*`) are refused.
 
-#[path = "../../../fuzz/check_smf.rs"]
-mod check_smf;
-
-#[path = "../../../fuzz/replay.rs"]
-mod replay_support;
-
-use replay_support::{inputs, replay};
 use std::path::{Path, PathBuf};
+use testkit::fuzz::replay::{inputs, replay};
+use testkit::fuzz::smf as check_smf;
 
 fn fuzz_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz")

@@ -9,6 +9,8 @@
 //! - `conducted` (feature `conduct`): a conductor on the virtual clock, its beats through a
 //!   source's decoder and the follower to a performance.
 //! - `sf2` (feature `sf2`): SoundFonts written here, whose sound starts on its first sample.
+//! - [`fuzz`]: the fuzz targets' checks (features `fuzz-interpret`, `fuzz-smf`, `fuzz-rtp`,
+//!   `fuzz-robot-toml`) and the replay of a corpus through them.
 //!
 //! ```
 //! // Middle C for a quarter note, at 120 bpm (480 ticks a quarter).
@@ -19,6 +21,7 @@
 #[cfg(feature = "conduct")]
 pub mod conducted;
 pub mod examples;
+pub mod fuzz;
 #[cfg(feature = "sf2")]
 pub mod sf2;
 pub mod smf;

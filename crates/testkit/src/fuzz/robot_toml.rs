@@ -1,7 +1,6 @@
 //! The invariants the `robot_toml` fuzz target checks, shared with the stable-Rust test
 //! `tests/fuzz_replay.rs` (the `orch` package), which replays the corpus and the regressions
-//! with it. Plain Rust: depends on `orch_stage`, `orch_robot` and `std` only, so both can include
-//! it with `#[path]`.
+//! with it. Both use it from here (testkit's `fuzz-robot-toml` feature).
 //!
 //! An input is text: bytes that are not UTF-8 are replaced (U+FFFD), so every input is
 //! checked. The same text goes through both of the `orch` program's text readers:

@@ -1,6 +1,6 @@
 //! The invariants the `smf` fuzz target checks, shared with the stable-Rust test
 //! `crates/seq/tests/fuzz_replay.rs`, which replays the corpus and the regressions with it.
-//! Plain Rust: depends on `orch_seq` and `std` only, so both can include it with `#[path]`.
+//! Both use it from here (testkit's `fuzz-smf` feature).
 //!
 //! An input is the bytes of a would-be Standard MIDI File, as is: the seeds are real files
 //! and cut or damaged copies. The schedule's settings (delays, re-strike gap, minimum press,

@@ -1,6 +1,6 @@
 //! The invariants the `interpret` fuzz target checks, shared with the stable-Rust test
 //! `crates/core/tests/fuzz_replay.rs`, which replays the corpus and the regressions with it.
-//! Plain Rust: depends on `orch_core` and `std` only, so both can include it with `#[path]`.
+//! Both use it from here (testkit's `fuzz-interpret` feature).
 //!
 //! An input is a 4-byte header and a MIDI byte stream:
 //!

@@ -1,7 +1,6 @@
 //! Shared by the stable-Rust replay tests (`crates/core/tests/fuzz_replay.rs`,
 //! `crates/seq/tests/fuzz_replay.rs`, `tests/fuzz_replay.rs`): finds the inputs of a corpus or
 //! regressions folder and runs each through a fuzz target's checks, naming the file that fails.
-#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 
