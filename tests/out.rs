@@ -17,22 +17,7 @@ use serde_json::Value;
 /// A one-track SMF, 480 ticks a quarter at 120 bpm (a tick is 1/960 s): each entry is
 /// (delta ticks, message).
 fn smf(events: &[(u32, &[u8])]) -> Vec<u8> {
-    let mut track = Vec::new();
-    for (delta, msg) in events {
-        let mut v = vec![(delta & 0x7F) as u8];
-        let mut d = delta >> 7;
-        while d > 0 {
-            v.insert(0, 0x80 | (d & 0x7F) as u8);
-            d >>= 7;
-        }
-        track.extend_from_slice(&v);
-        track.extend_from_slice(msg);
-    }
-    track.extend_from_slice(&[0, 0xFF, 0x2F, 0]);
-    let mut f = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
-    f.extend_from_slice(&(track.len() as u32).to_be_bytes());
-    f.extend_from_slice(&track);
-    f
+    testkit::smf::one_track(events)
 }
 
 /// A short piece on two channels: a scale, repeated notes, chords, about 2.5 s.

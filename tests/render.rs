@@ -37,32 +37,17 @@ fn smf(notes: &[(u32, u8, u8, u32)]) -> Vec<u8> {
 /// The same with each note's channel (0-based: 9 is General MIDI's drums): `(ms, channel,
 /// note, velocity, length ms)`.
 fn smf_on(notes: &[(u32, u8, u8, u8, u32)]) -> Vec<u8> {
-    let mut ev: Vec<(u32, [u8; 3])> = Vec::new();
+    let mut ev: Vec<(u32, Vec<u8>)> = Vec::new();
     for &(at, ch, n, v, len) in notes {
-        ev.push((at, [0x90 | ch, n, v]));
-        ev.push((at + len, [0x80 | ch, n, 0]));
+        ev.push((at, vec![0x90 | ch, n, v]));
+        ev.push((at + len, vec![0x80 | ch, n, 0]));
     }
     ev.sort_by_key(|e| e.0);
-    let mut track = Vec::new();
-    let mut last = 0;
-    for (ms, bytes) in ev {
-        let tick = ms * 96 / 100;
-        let mut d = tick - last;
-        last = tick;
-        let mut var = vec![(d & 0x7F) as u8];
-        d >>= 7;
-        while d > 0 {
-            var.insert(0, 0x80 | (d & 0x7F) as u8);
-            d >>= 7;
-        }
-        track.extend_from_slice(&var);
-        track.extend_from_slice(&bytes);
-    }
-    track.extend_from_slice(&[0, 0xFF, 0x2F, 0]);
-    let mut f = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
-    f.extend_from_slice(&(track.len() as u32).to_be_bytes());
-    f.extend_from_slice(&track);
-    f
+    let at: Vec<(u64, Vec<u8>)> = ev
+        .into_iter()
+        .map(|(ms, bytes)| (u64::from(ms) * 96 / 100, bytes))
+        .collect();
+    testkit::smf::at_ticks(&at)
 }
 
 fn config(boards: &str, edit: impl Fn(String) -> String) -> PathBuf {

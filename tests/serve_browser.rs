@@ -399,20 +399,13 @@ fn a_performance_is_drawn_live_in_the_accounts_order_on_two_browsers_and_its_rep
 
 /// A chord of 60, 64, 67 and 72 held 10 s (at 120 BPM, 480 ticks a quarter).
 fn long_chord() -> Vec<u8> {
-    let mut trk = vec![0x00, 0xFF, 0x51, 0x03, 0x07, 0xA1, 0x20];
-    for n in [60u8, 64, 67, 72] {
-        trk.extend_from_slice(&[0x00, 0x90, n, 100]);
-    }
-    // 20 quarters: 9600 ticks, as a variable-length number.
-    trk.extend_from_slice(&[0xCB, 0x00, 0x80, 60, 0]);
-    for n in [64u8, 67, 72] {
-        trk.extend_from_slice(&[0x00, 0x80, n, 0]);
-    }
-    trk.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
-    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
-    smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
-    smf.extend_from_slice(&trk);
-    smf
+    let tempo = testkit::smf::tempo(500_000);
+    let mut events: Vec<(u32, Vec<u8>)> = vec![(0, tempo)];
+    events.extend([60u8, 64, 67, 72].map(|n| (0, vec![0x90, n, 100])));
+    // 20 quarters: 9600 ticks.
+    events.extend([60u8, 64, 67, 72].map(|n| (if n == 60 { 9600 } else { 0 }, vec![0x80, n, 0])));
+    let events: Vec<(u32, &[u8])> = events.iter().map(|(d, e)| (*d, e.as_slice())).collect();
+    testkit::smf::one_track(&events)
 }
 
 #[test]

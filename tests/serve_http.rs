@@ -390,15 +390,13 @@ fn sigterm_with_a_viewer_watching_a_chord_releases_every_key_and_ends_the_server
         .unwrap();
     let out = format!("udp:{}", udp.local_addr().unwrap());
     let mut s = Served::start(&["--listen", "127.0.0.1:0", "--out", &out]);
-    // 4 notes at once, held 30 s.
-    let mut trk = vec![0x00, 0xFF, 0x51, 0x03, 0x07, 0xA1, 0x20];
-    for n in [60u8, 64, 67, 72] {
-        trk.extend_from_slice(&[0x00, 0x90, n, 100]);
-    }
-    trk.extend_from_slice(&[0x83, 0xE1, 0x00, 0x80, 60, 0, 0x00, 0xFF, 0x2F, 0x00]);
-    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
-    smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
-    smf.extend_from_slice(&trk);
+    // 4 notes at once, held 30 s (61 568 ticks at 120 BPM; only 60 is let go, at the end).
+    let tempo = testkit::smf::tempo(500_000);
+    let mut events: Vec<(u32, &[u8])> = vec![(0, &tempo)];
+    let ons: Vec<[u8; 3]> = [60u8, 64, 67, 72].map(|n| [0x90, n, 100]).to_vec();
+    events.extend(ons.iter().map(|on| (0, &on[..])));
+    events.push((61_568, &[0x80, 60, 0]));
+    let smf = testkit::smf::one_track(&events);
     let (status, body) = s.request(
         "POST",
         "/api/songs?name=chord.mid",

@@ -9,26 +9,14 @@ use std::time::{Duration, Instant};
 
 /// A one-track SMF: 480 ticks a quarter at 120 bpm; C4 E4 G4 held from 0.5 s to 3.5 s.
 fn chord_file() -> Vec<u8> {
-    let mut track = Vec::new();
-    let mut push = |delta: u32, msg: &[u8]| {
-        // Deltas here fit two VLQ bytes.
-        if delta >= 128 {
-            track.push(0x80 | (delta >> 7) as u8);
-        }
-        track.push((delta & 0x7F) as u8);
-        track.extend_from_slice(msg);
-    };
-    push(480, &[0x90, 60, 100]);
-    push(0, &[0x90, 64, 100]);
-    push(0, &[0x90, 67, 100]);
-    push(2880, &[0x80, 60, 0]);
-    push(0, &[0x80, 64, 0]);
-    push(0, &[0x80, 67, 0]);
-    push(0, &[0xFF, 0x2F, 0x00]);
-    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
-    smf.extend_from_slice(&(track.len() as u32).to_be_bytes());
-    smf.extend_from_slice(&track);
-    smf
+    testkit::smf::one_track(&[
+        (480, &[0x90, 60, 100]),
+        (0, &[0x90, 64, 100]),
+        (0, &[0x90, 67, 100]),
+        (2880, &[0x80, 60, 0]),
+        (0, &[0x80, 64, 0]),
+        (0, &[0x80, 67, 0]),
+    ])
 }
 
 /// A tmux server of its own running one command in a 100×30 pseudo-terminal; killed on drop.

@@ -21,32 +21,17 @@ fn scratch(name: &str) -> PathBuf {
 /// A one-track file at 120 bpm, 480 ticks a quarter (0.96 tick a ms): `(ms, note, length ms)`
 /// on channel 1, velocity 100.
 fn smf(notes: &[(u32, u8, u32)]) -> Vec<u8> {
-    let mut ev: Vec<(u32, u8, [u8; 3])> = Vec::new();
+    let mut ev: Vec<(u32, u8, Vec<u8>)> = Vec::new();
     for &(at, n, len) in notes {
-        ev.push((at, 1, [0x90, n, 100]));
-        ev.push((at + len, 0, [0x80, n, 0]));
+        ev.push((at, 1, vec![0x90, n, 100]));
+        ev.push((at + len, 0, vec![0x80, n, 0]));
     }
     ev.sort_by_key(|e| (e.0, e.1)); // a Note-Off before a Note-On at the same time
-    let mut track = Vec::new();
-    let mut last = 0;
-    for (ms, _, bytes) in ev {
-        let tick = ms * 96 / 100;
-        let mut d = tick - last;
-        last = tick;
-        let mut var = vec![(d & 0x7F) as u8];
-        d >>= 7;
-        while d > 0 {
-            var.insert(0, 0x80 | (d & 0x7F) as u8);
-            d >>= 7;
-        }
-        track.extend_from_slice(&var);
-        track.extend_from_slice(&bytes);
-    }
-    track.extend_from_slice(&[0, 0xFF, 0x2F, 0]);
-    let mut f = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
-    f.extend_from_slice(&(track.len() as u32).to_be_bytes());
-    f.extend_from_slice(&track);
-    f
+    let at: Vec<(u64, Vec<u8>)> = ev
+        .into_iter()
+        .map(|(ms, _, bytes)| (u64::from(ms) * 96 / 100, bytes))
+        .collect();
+    testkit::smf::at_ticks(&at)
 }
 
 fn recorder(dir: &Path) -> PathBuf {

@@ -165,17 +165,17 @@ fn a_pause_releases_every_key_and_the_rest_plays_once_after_it() {
 /// once, when it was going to), and the note the change made late is counted late.
 #[test]
 fn a_change_after_an_early_press_counts_the_note_it_made_late() {
-    // Three quarter notes at 60 BPM: at 0, 1 and 2 s, 100 ms each.
-    let mut trk = vec![0x00, 0xFF, 0x51, 0x03, 0x0F, 0x42, 0x40];
-    for i in 0..3u8 {
-        let delta: &[u8] = if i == 0 { &[0] } else { &[0x83, 0x30] };
-        trk.extend_from_slice(delta);
-        trk.extend_from_slice(&[0x90, 60 + i, 100, 0x30, 0x80, 60 + i, 0]);
+    // Three quarter notes at 60 BPM: at 0, 1 and 2 s, 100 ms each (48 ticks).
+    let tempo = testkit::smf::tempo(1_000_000);
+    let mut events: Vec<(u32, &[u8])> = vec![(0, &tempo)];
+    let notes: Vec<([u8; 3], [u8; 3])> = (0..3u8)
+        .map(|i| ([0x90, 60 + i, 100], [0x80, 60 + i, 0]))
+        .collect();
+    for (i, (on, off)) in notes.iter().enumerate() {
+        events.push((if i == 0 { 0 } else { 432 }, on));
+        events.push((48, off));
     }
-    trk.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
-    let mut smf = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
-    smf.extend_from_slice(&(trk.len() as u32).to_be_bytes());
-    smf.extend_from_slice(&trk);
+    let smf = testkit::smf::one_track(&events);
     let song = Song::parse(&smf).unwrap();
     let setup = Setup::thesis();
     let lead = setup.rules().press_lead_us[24 + 1];

@@ -14,32 +14,17 @@ const RATE: u32 = 44_100;
 /// A format-0 file, 480 ticks a quarter at 120 bpm (1 ms = 0.96 tick): `(ms, note, velocity,
 /// length ms)`, in time order.
 fn smf(notes: &[(u32, u8, u8, u32)]) -> Song {
-    let mut ev: Vec<(u32, [u8; 3])> = Vec::new();
+    let mut ev: Vec<(u32, Vec<u8>)> = Vec::new();
     for &(at, n, v, len) in notes {
-        ev.push((at, [0x90, n, v]));
-        ev.push((at + len, [0x80, n, 0]));
+        ev.push((at, vec![0x90, n, v]));
+        ev.push((at + len, vec![0x80, n, 0]));
     }
     ev.sort_by_key(|e| e.0);
-    let mut track = Vec::new();
-    let mut last = 0u32;
-    for (ms, bytes) in ev {
-        let tick = ms * 96 / 100;
-        let mut d = tick - last;
-        last = tick;
-        let mut var = vec![(d & 0x7F) as u8];
-        d >>= 7;
-        while d > 0 {
-            var.insert(0, 0x80 | (d & 0x7F) as u8);
-            d >>= 7;
-        }
-        track.extend_from_slice(&var);
-        track.extend_from_slice(&bytes);
-    }
-    track.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
-    let mut b = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
-    b.extend_from_slice(&(track.len() as u32).to_be_bytes());
-    b.extend_from_slice(&track);
-    Song::parse(&b).unwrap()
+    let at: Vec<(u64, Vec<u8>)> = ev
+        .into_iter()
+        .map(|(ms, bytes)| (u64::from(ms) * 96 / 100, bytes))
+        .collect();
+    Song::parse(&testkit::smf::at_ticks(&at)).unwrap()
 }
 
 fn play(song: &Song, config: orch_core::Config<{ orch_perform::MAX_BOARDS }>) -> Played {

@@ -9,28 +9,10 @@ use orch_seq::Song;
 /// A format-0 SMF at 480 ticks a quarter (120 bpm: a tick is 1.0417 ms) with a 3/4 time
 /// signature, of `events` as (absolute tick, bytes), sorted by tick (stable).
 pub fn smf(events: &[(u32, &[u8])]) -> Vec<u8> {
-    let mut events = events.to_vec();
-    events.sort_by_key(|(t, _)| *t);
-    let mut track = vec![0x00, 0xFF, 0x58, 0x04, 3, 2, 24, 8];
-    let mut now = 0;
-    for (t, bytes) in events {
-        let delta = t - now;
-        now = t;
-        // A variable-length quantity.
-        let mut v = vec![(delta & 0x7F) as u8];
-        let mut d = delta >> 7;
-        while d > 0 {
-            v.insert(0, 0x80 | (d & 0x7F) as u8);
-            d >>= 7;
-        }
-        track.extend_from_slice(&v);
-        track.extend_from_slice(bytes);
-    }
-    track.extend_from_slice(&[0x00, 0xFF, 0x2F, 0x00]);
-    let mut f = b"MThd\0\0\0\x06\0\0\0\x01\x01\xE0MTrk".to_vec();
-    f.extend_from_slice(&(track.len() as u32).to_be_bytes());
-    f.extend_from_slice(&track);
-    f
+    // The time signature first, at tick 0; at_ticks keeps that order (a stable sort).
+    let mut at: Vec<(u64, Vec<u8>)> = vec![(0, vec![0xFF, 0x58, 0x04, 3, 2, 24, 8])];
+    at.extend(events.iter().map(|(t, b)| (u64::from(*t), b.to_vec())));
+    testkit::smf::at_ticks(&at)
 }
 
 /// The thesis's robot listening to channels 1 and 2, and a song that gives every outcome a

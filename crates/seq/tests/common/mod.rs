@@ -1,5 +1,5 @@
 //! Helpers shared by the integration tests: the corpus, and hand-built SMF bytes.
-#![allow(dead_code)]
+#![allow(dead_code, unused_imports)]
 
 use std::path::PathBuf;
 
@@ -53,44 +53,9 @@ pub fn read(file: &str) -> Vec<u8> {
     std::fs::read(corpus_dir().join(file)).unwrap()
 }
 
-/// A variable-length quantity.
-pub fn vlq(mut v: u32) -> Vec<u8> {
-    let mut out = vec![(v & 0x7F) as u8];
-    v >>= 7;
-    while v > 0 {
-        out.insert(0, (v & 0x7F) as u8 | 0x80);
-        v >>= 7;
-    }
-    out
-}
+pub use testkit::smf::{smf, vlq};
 
-/// An SMF with `format`, the raw 16-bit `division`, and tracks of `(delta, event bytes)`.
-/// Each track gets an End of Track.
-pub fn smf(format: u16, division: u16, tracks: &[Vec<(u32, Vec<u8>)>]) -> Vec<u8> {
-    let mut out = b"MThd".to_vec();
-    out.extend_from_slice(&6u32.to_be_bytes());
-    out.extend_from_slice(&format.to_be_bytes());
-    out.extend_from_slice(&(tracks.len() as u16).to_be_bytes());
-    out.extend_from_slice(&division.to_be_bytes());
-    for t in tracks {
-        let mut data = Vec::new();
-        for (delta, ev) in t {
-            data.extend(vlq(*delta));
-            data.extend_from_slice(ev);
-        }
-        data.extend([0x00, 0xFF, 0x2F, 0x00]);
-        out.extend_from_slice(b"MTrk");
-        out.extend_from_slice(&(data.len() as u32).to_be_bytes());
-        out.extend(data);
-    }
-    out
-}
-
-/// A tempo meta event.
-pub fn tempo(us_per_quarter: u32) -> Vec<u8> {
-    let b = us_per_quarter.to_be_bytes();
-    vec![0xFF, 0x51, 0x03, b[1], b[2], b[3]]
-}
+pub use testkit::smf::tempo;
 
 pub fn on(ch: u8, note: u8) -> Vec<u8> {
     vec![0x90 | ch, note, 100]
