@@ -7,6 +7,9 @@ use std::process::Command;
 
 use serde_json::Value;
 
+#[path = "support/serve.rs"]
+mod serve;
+
 fn orch() -> Command {
     Command::new(env!("CARGO_BIN_EXE_orch"))
 }
@@ -114,6 +117,44 @@ fn piano_drums_and_recorder_play_a_corpus_file_as_one_robot_and_each_group_is_re
         .unwrap();
     let text = String::from_utf8(out.stdout).unwrap();
     for name in ["keyboard", "drums", "recorder"] {
+        assert!(
+            text.lines()
+                .any(|l| l.starts_with("group") && l.contains(name)),
+            "{text}"
+        );
+    }
+}
+
+/// `orch serve` plays the same robot: the report at the end says how each group fared.
+#[test]
+fn orch_serve_plays_the_ensemble_and_reports_each_group() {
+    let dir = scratch("serve");
+    let robot = dir.join("ensemble.toml");
+    std::fs::write(&robot, ensemble("[9, 16]", 15)).unwrap();
+    let s = serve::Served::start(&[
+        "--listen",
+        "127.0.0.1:0",
+        "--robot",
+        robot.to_str().unwrap(),
+    ]);
+    let bytes = std::fs::read(corpus(FILE)).unwrap();
+    let octets = ["Content-Type: application/octet-stream"];
+    let (status, body) = s.request("POST", "/api/songs?name=smile.mid", &octets, &bytes);
+    assert_eq!(status, 200, "{body}");
+    let id = serde_json::from_str::<Value>(&body).unwrap()["id"].clone();
+    let (status, body) = s.command(r#"{"cmd":"tempo","factor":20}"#);
+    assert_eq!(status, 200, "{body}");
+    let (status, body) = s.command(&format!(r#"{{"cmd":"play","song":{id}}}"#));
+    assert_eq!(status, 200, "{body}");
+    s.wait_state(60, |st| st["ended"]["name"] == "smile.mid");
+    let ended = s.get_json("/api/ended");
+    let groups = ended["report"]["groups"]
+        .as_array()
+        .expect("per-group figures");
+    let names: Vec<&str> = groups.iter().map(|g| g["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["keyboard", "drums", "recorder"], "{ended}");
+    for name in ["keyboard", "drums", "recorder"] {
+        let text = ended["text"].as_str().unwrap();
         assert!(
             text.lines()
                 .any(|l| l.starts_with("group") && l.contains(name)),
