@@ -1,6 +1,6 @@
 'use strict';
 // The `pca9685` build's drum kit: General MIDI notes on channel 10 fire the nine beaters on the
-// fifth PCA9685 (0x44, channels 0..=8; firmware/rp2040/src/robot.rs). A drum pattern with the
+// fifth PCA9685 (0x44, channels 0..=8; firmware/rp2040-robot/src/lib.rs). A drum pattern with the
 // piano playing beside it, where every duty write equals orch-core's flush_duties on the host
 // (as the keys are proven in pca9685.test.js); every strike's channel goes off by itself at
 // its pulse's end (8 ms at velocity 1 to 20 ms at 127), whatever the Note-Off does and with
@@ -15,7 +15,7 @@ const { fmt, assertPwmSameAsHost } = require('./common.js');
 const KIT = 4;
 const HIT = 0x99;
 const DAMP = 0x89;
-/** The kit's beaters (robot.rs's KIT): channel on the fifth board by GM note. */
+/** The kit's beaters (orch-rp2040-robot's KIT): channel on the fifth board by GM note. */
 const BEATER = { 35: 0, 36: 0, 38: 1, 40: 1, 42: 2, 46: 2, 44: 3, 41: 4, 43: 4, 45: 5, 47: 5, 48: 6, 50: 6, 49: 7, 57: 7, 51: 8, 59: 8 };
 /** orch-core's Touch::PWM: 45 % at velocity 1 to 100 % at 127. */
 const SOFTEST = 1843;

@@ -5,7 +5,7 @@
 //!   thru, as the thesis's board passed its stream on to the flute robot.
 //! - orch-core's interpreter and safety guard with the thesis's keyboard and boards
 //!   (`Interpreter::thesis`, in a static built at compile time; the `pca9685` build's piano
-//!   and drum kit, `robot.rs`, in a static built at start-up), time from embassy-time (µs). DIN bytes go through its decoder; a USB-MIDI event carries a whole message, decoded
+//!   and drum kit, `orch-rp2040-robot`, in a static built at start-up), time from embassy-time (µs). DIN bytes go through its decoder; a USB-MIDI event carries a whole message, decoded
 //!   apart so that it never splits a DIN message's running status.
 //! - The four PCA9555 finger boards at 0x21..=0x24 on I2C0 (GP4 SDA, GP5 SCL) at 400 kHz,
 //!   with orch-boards' async driver: each board initialised outputs-0 FIRST, THEN outputs;
@@ -13,7 +13,7 @@
 //!   again every 10 ms with its frame. Every bus operation has a time limit and a hung bus is
 //!   recovered ([`bus`]): a hung board no longer hangs the loop. With the `pca9685` feature,
 //!   five PCA9685 PWM boards at 0x40..=0x44 instead, a piano and a drum kit on channel 10
-//!   (`robot.rs`), keys played with strike and hold, drums with pulses that end by
+//!   (`orch-rp2040-robot`), keys played with strike and hold, drums with pulses that end by
 //!   themselves, and the boards' output-enable pin on GP6 as the hardware stop
 //!   (`pca9685.rs`); the loop is the same.
 //! - The watchdog (0.5 s), fed by the interpreter loop: a hung loop resets the Pico, and
@@ -26,7 +26,7 @@
 mod bus;
 mod led;
 #[cfg(feature = "pca9685")]
-mod robot;
+use orch_rp2040_robot as robot;
 
 // The finger boards: the same interface from either file (`Boards`, `robot`, `changed`,
 // `frame`, `is_off`, `release_all_now`, `ADDRESSES`).

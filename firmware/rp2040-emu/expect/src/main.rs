@@ -7,7 +7,7 @@
 //!   board write, one a line: `write T BOARD OUTPUTS` (µs, 0..4, the 16 outputs), then
 //!   `outputs O0 O1 O2 O3` (the final frame). Numbers are decimal, or hex with `0x`.
 //! - `orch-rp2040-expect pca9685` does the same for the firmware's `pca9685` build: the
-//!   settings in `firmware/rp2040/src/robot.rs` (included here, so both run the same ones:
+//!   settings in `firmware/rp2040-robot` (a crate both depend on, so both run the same ones:
 //!   five PCA9685 boards, a piano played with strike and hold and a drum kit on channel 10
 //!   played with pulses), flushed with `flush_duties`; it prints every `write_duties` as
 //!   `duties T BOARD D0 .. D15` (µs, 0..5, each channel's duty 0..=4095), then
@@ -24,8 +24,7 @@ use std::io::{BufRead, Write};
 use orch_core::{BoardId, Decoder, Duty, FingerBoards, HeldNotes, Instant, Interpreter};
 
 /// The firmware's settings for its `pca9685` build.
-#[path = "../../../rp2040/src/robot.rs"]
-mod robot;
+use orch_rp2040_robot as robot;
 
 /// Board writes with the time they were made.
 struct Recorder<'a, W: Write> {

@@ -1,6 +1,6 @@
-//! The robot the `pca9685` build plays: orch-core's settings, in one place for the firmware and
-//! for the host's `orch-rp2040-expect` (which includes this file), so the emulator tests
-//! compare the firmware with orch-core run on exactly these settings.
+//! The robot the Pico firmware's `pca9685` build plays: orch-core's settings, in one place for
+//! the firmware and for the host's `orch-rp2040-expect` (both depend on this crate), so the
+//! emulator tests compare the firmware with orch-core run on exactly these settings.
 //!
 //! A piano and a General MIDI drum kit, on five PCA9685 PWM boards:
 //!
@@ -17,6 +17,8 @@
 //! The kit has a board of its own so that the keyboard's boards and keys stay exactly as they
 //! were (key `k` on board `k / 16`), and the drums' coils, larger than the keys', can have their
 //! own supply on their own board.
+
+#![no_std]
 
 use orch_core::{
     BoardSpan, ChannelMask, Config, Dynamics, GuardConfig, Interpreter, KeyRange, Layout,
