@@ -47,23 +47,27 @@
 //!   is taken when the energy rose at least 30 times (15 dB), the rise did not begin before
 //!   the search window (a thump or another sound already there) and it lies within 0.4 of
 //!   the key's periods plus 15 ms of the coarse onset (in a reverberant room the envelope's
-//!   crossing can come 7 ms late: the early reflections keep its partials rising). A strike for which it is not taken (soft, in noise) is timed on the envelope,
-//!   moved by the key's own offset between the two timings (the median over its strikes
-//!   where both were taken): the key's strikes are the same string, so the envelope's bias
-//!   is the same.
-//! - **The string, not a thump** ([`periodic_onset`](crate::sharp::periodic_onset)): a solenoid's thump 2–5 ms before the
-//!   string (a click, the case's low thud) raises the high-passed energy first, and its rise
-//!   runs into the string's without falling back. The string repeats at the key's period; a
-//!   thump, noise and a room's tail do not. So the same high-passed stretch is multiplied by
+//!   crossing can come 7 ms late: the early reflections keep its partials rising). A strike
+//!   for which it is not taken (soft, in noise) is timed on the string's periodicity (below)
+//!   if that rose clear, else on the envelope, moved by the key's own offset between the two
+//!   timings (the median over its strikes where both were taken): the key's strikes are the
+//!   same string, so the envelope's bias is the same.
+//! - **The string, not a thump** ([`periodic_onset`](crate::sharp::periodic_onset)): a
+//!   solenoid's thump 2–5 ms before the string (a click, the case's low thud) raises the
+//!   high-passed energy first, and its rise runs into the string's without falling back. The
+//!   string repeats at the key's period; a thump, noise and a room's tail do not. So the same
+//!   high-passed stretch, low-passed above the key's 16th partial (8 kHz at most: the key's
+//!   bins' band, which keeps the string and leaves out the noise above it), is multiplied by
 //!   itself a lag later (the whole number of periods at least 3 ms long, the one within ±2 %
-//!   that repeats best after the onset: a click has died within it), summed over the same
-//!   3 ms window: before the string that product has no sign of its own, from the string on
-//!   it is the string's energy. Where it rises (the same fifth of the way, the same 5 ms)
-//!   more than 1 ms after the energy, the onset is there (if it rose 30 robust standard
-//!   deviations over its level before: in noise it is not to be trusted). A strike timed on the envelope
-//!   whose periodicity starts more than 3 ms after that timing is timed on the periodicity:
-//!   in a bass key's bands, about as wide as its first partial, the thud and the string are
-//!   one rise, and at a soft strike the thud is as loud as the string. The energy's timing
+//!   that repeats best after the onset: a click has died within it), summed over the same 3
+//!   ms window: before the string that product has no sign of its own, from the string on it
+//!   is the string's energy. Where it rises (the same fifth of the way, the same 5 ms) more
+//!   than 1 ms after the energy, the onset is there (if it rose 15 robust standard deviations
+//!   over its level before: in noise it is not to be trusted). A strike whose energy did not
+//!   rise enough to be taken is timed on its periodicity wherever that rose clear, and on the
+//!   envelope only where it did not: in a bass key's bands, about as wide as its first
+//!   partial, the thud and the string are one rise, and at a soft strike the thud is 10–20 dB
+//!   over the string there (the envelope put them up to 14 ms early). The energy's timing
 //!   stays the first choice: without a thump the two agree (within 0.6 ms for 95 % of the
 //!   strikes in the rendered test's rooms) and the energy's is the less noisy.
 //! - **Level**: the mean string power of the frames from the onset on, in dB (mean-square
@@ -459,9 +463,10 @@ fn set_levels(strikes: &mut [Strike], half_ms: f64, string_sigma: f64) {
     }
 }
 
-/// The onsets whose sharp timing was not taken: on the envelope, moved by the envelope's
-/// offset from the sharp timing on the key's clear strikes (the median); on the string's
-/// periodicity where that starts over [`SOFT_THUMP_SHIFT_MS`] later.
+/// The onsets whose sharp timing was not taken: where the string's periodicity starts, if
+/// it rose clear of the noise (a thump, a click, the room do not repeat at the key's period);
+/// else on the envelope, moved by the envelope's offset from the sharp timing on the key's
+/// clear strikes (the median).
 fn time_unsharp(strikes: &mut [Strike]) {
     let mut offsets: Vec<f64> = strikes
         .iter()
@@ -471,19 +476,17 @@ fn time_unsharp(strikes: &mut [Strike]) {
             _ => None,
         })
         .collect();
-    if offsets.is_empty() {
-        return;
-    }
-    let offset = median(&mut offsets);
+    let offset = (!offsets.is_empty()).then(|| median(&mut offsets));
     for s in strikes {
         for (o, t) in s.heard.onsets_ms.iter_mut().zip(&s.timings) {
-            if !t.sharp.is_some_and(|s| s.taken()) {
-                let guess = t.t_env + offset;
-                *o = match t.sharp.and_then(|s| s.periodic) {
-                    Some(p) if p - guess > SOFT_THUMP_SHIFT_MS => p,
-                    _ => guess,
-                };
+            if t.sharp.is_some_and(|s| s.taken()) {
+                continue;
             }
+            *o = match (t.sharp.and_then(|s| s.periodic), offset) {
+                (Some(p), _) => p,
+                (None, Some(offset)) => t.t_env + offset,
+                (None, None) => t.t_env,
+            };
         }
     }
 }
@@ -524,13 +527,6 @@ const NEAR_PERIODS: f64 = 0.4;
 /// ... and this many ms of the envelope's (5 ms left a key whose envelope came 7 ms late in
 /// a reverberant room on the envelope, and every other key 7 ms off when it was the anchor).
 const NEAR_MS: f64 = 15.0;
-/// A strike timed on the envelope (and its key's offset) whose string's periodicity starts
-/// more than this much later, ms, is timed on the periodicity: the envelope took a thump's
-/// thud for the string (in a bass key's bands, about as wide as its first partial, a thud a
-/// few ms before the string is one rise with it). 3 ms: beyond a soft strike's own scatter
-/// between the two (without a thump no strike moves in the rendered test's rooms; at 1.5 ms
-/// two did, to 3.0 and 3.4 ms off).
-const SOFT_THUMP_SHIFT_MS: f64 = 3.0;
 
 /// The onset on the envelope near `guess` (ms): where it crosses half-way from its level
 /// before (the median 150 to 60 ms before `guess`) to its peak (within 10 ms before to 60 ms

@@ -40,9 +40,18 @@ const SHARP_FRACTION: f64 = 0.2;
 const PERIODIC_MIN_LAG_MS: f64 = 3.0;
 /// The periodicity's rise must be this many robust standard deviations of its level before
 /// (from 50 to 15 ms before the onset) to time anything: at 20 dB SNR a soft strike's
-/// periodicity in noise, taken without it, moved strikes without a thump up to 4 ms on the
-/// synthetic recordings (`--bench accuracy`).
-const PERIODIC_CLEAR: f64 = 30.0;
+/// periodicity in noise, taken without any such bound, moved strikes without a thump up to 4
+/// ms on the synthetic recordings (`--bench accuracy`). 15 since the periodicity is
+/// band-limited to the key's partials ([`PERIODIC_TOP_PARTIAL`]): that lifted a soft bass
+/// strike's rise from 4–10 to 15–32 of them, and at 30 it left the softest strikes of C2–B2
+/// to the envelope, which a thump's thud moves up to 14 ms early.
+const PERIODIC_CLEAR: f64 = 15.0;
+/// The periodicity is measured below this partial of the key ... (its first 16, as the
+/// key's bins): a bass key's string has nothing above, the room's noise has all the band up
+/// to 22 kHz, 20 times the string's at C2 (its rise in noise 3–4 times clearer with it).
+const PERIODIC_TOP_PARTIAL: f64 = 16.5;
+/// ... and below this, Hz (the key's bins' top).
+const PERIODIC_TOP_HZ: f64 = 8000.0;
 /// A periodicity starting this much later than the high-passed energy's rise, ms, is the
 /// string after a thump.
 const THUMP_SHIFT_MS: f64 = 1.0;
@@ -57,6 +66,35 @@ fn highpass_zero_phase(x: &mut [f64], rate: f64, fc: f64) {
         (1.0 + cs) / 2.0 / a0,
         -(1.0 + cs) / a0,
         (1.0 + cs) / 2.0 / a0,
+    ];
+    let a = [-2.0 * cs / a0, (1.0 - alpha) / a0];
+    let pass = |x: &mut [f64]| {
+        let (mut x1, mut x2, mut y1, mut y2) = (0.0, 0.0, 0.0, 0.0);
+        for v in x.iter_mut() {
+            let y = b[0] * *v + b[1] * x1 + b[2] * x2 - a[0] * y1 - a[1] * y2;
+            x2 = x1;
+            x1 = *v;
+            y2 = y1;
+            y1 = y;
+            *v = y;
+        }
+    };
+    pass(x);
+    x.reverse();
+    pass(x);
+    x.reverse();
+}
+
+/// A second-order Butterworth low-pass (RBJ), run forward then backward: zero phase.
+fn lowpass_zero_phase(x: &mut [f64], rate: f64, fc: f64) {
+    let w = 2.0 * std::f64::consts::PI * fc / rate;
+    let (sn, cs) = w.sin_cos();
+    let alpha = sn / (2.0 * std::f64::consts::FRAC_1_SQRT_2);
+    let a0 = 1.0 + alpha;
+    let b = [
+        (1.0 - cs) / 2.0 / a0,
+        (1.0 - cs) / a0,
+        (1.0 - cs) / 2.0 / a0,
     ];
     let a = [-2.0 * cs / a0, (1.0 - alpha) / a0];
     let pass = |x: &mut [f64]| {
@@ -126,14 +164,16 @@ fn first_sustained(
     Some(first as f64 - 1.0 + frac.clamp(0.0, 1.0))
 }
 
-/// A stretch of the recording high-passed at `cutoff_hz` (zero-phase): from `from_ms` to
-/// `to_ms`, with its first sample's index (`None` if it runs outside the recording).
-fn highpassed(
+/// A stretch of the recording high-passed at `cutoff_hz` and, if given, low-passed at
+/// `top_hz` (both zero-phase): from `from_ms` to `to_ms`, with its first sample's index
+/// (`None` if it runs outside the recording).
+fn band(
     x: &[f32],
     rate: u32,
     from_ms: f64,
     to_ms: f64,
     cutoff_hz: f64,
+    top_hz: Option<f64>,
 ) -> Option<(Vec<f64>, i64)> {
     let per_ms = f64::from(rate) / 1000.0;
     let from = (from_ms * per_ms).round() as i64;
@@ -146,6 +186,9 @@ fn highpassed(
         .map(|&v| f64::from(v))
         .collect();
     highpass_zero_phase(&mut y, f64::from(rate), cutoff_hz);
+    if let Some(top) = top_hz {
+        lowpass_zero_phase(&mut y, f64::from(rate), top);
+    }
     Some((y, from))
 }
 
@@ -163,7 +206,15 @@ fn periodic_onset(x: &[f32], rate: u32, f0: f64, t: f64, cutoff_hz: f64) -> Opti
     let per_ms = f64::from(rate) / 1000.0;
     let period = 1000.0 / f0;
     let max_lag_ms = ((min_lag_ms / period).ceil().max(1.0) * period) * 1.03;
-    let (y, from) = highpassed(x, rate, t - 60.0, t + 40.0 + max_lag_ms, cutoff_hz)?;
+    let top_hz = (PERIODIC_TOP_PARTIAL * f0).min(PERIODIC_TOP_HZ);
+    let (y, from) = band(
+        x,
+        rate,
+        t - 60.0,
+        t + 40.0 + max_lag_ms,
+        cutoff_hz,
+        Some(top_hz),
+    )?;
     let at = |ms: f64| ((ms - (from as f64 / per_ms)) * per_ms).round() as usize;
     let lag = periodic_lag(
         &y,
@@ -203,7 +254,7 @@ pub(crate) fn refine(x: &[f32], rate: u32, note: u8, t: f64) -> Option<Sharp> {
     let per_ms = f64::from(rate) / 1000.0;
     let f0 = 440.0 * 2f64.powf((f64::from(note) - 69.0) / 12.0);
     let cutoff = (SHARP_PARTIAL * f0).max(SHARP_MIN_HZ);
-    let (y, from) = highpassed(x, rate, t - 60.0, t + 40.0, cutoff)?;
+    let (y, from) = band(x, rate, t - 60.0, t + 40.0, cutoff, None)?;
     let at = |ms: f64| ((ms - (from as f64 / per_ms)) * per_ms).round() as usize;
     let sq: Vec<f64> = y.iter().map(|v| v * v).collect();
     let e = moving_sum(&sq, ((SHARP_WINDOW_MS * per_ms) / 2.0).round() as usize);
