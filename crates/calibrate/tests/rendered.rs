@@ -179,10 +179,11 @@ fn the_calibrated_robot_toml_puts_the_hidden_robots_onsets_on_time() {
 /// broadband timing took a thump's rise for the onset (24 of the 166 strikes over 1.5 ms, in
 /// every octave, up to 14 ms early, a key's press delay 2.7 ms off); where the string's
 /// periodicity starts later, it is the onset. A soft strike too weak for the sharp timing
-/// is timed on its periodicity too (measured among the key's partials only, so that it rises
-/// clear of the noise), not on the partials' envelope, which a bass key's thud moves up to 14
-/// ms early: 7 strikes over 1.5 ms, up to 14.5 ms, without that; 2 with it, 3.6 ms at most
-/// (the softest strikes of D♯2 and F♯2, where the thump is 10–20 dB over the string).
+/// is timed on its periodicity too where that starts over 1.5 ms after the partials'
+/// envelope (the periodicity measured among the key's partials only, so that it rises clear
+/// of the noise), which a bass key's thud moves up to 14 ms early: 7 strikes over 1.5 ms, up
+/// to 14.5 ms, without that; 3 with it, 3.84 ms at most (soft strikes of C♯2, D♯2 and F♯2,
+/// where the thump is 10–20 dB over the string).
 #[test]
 fn a_solenoids_thump_before_each_string_is_not_its_onset() {
     let (hidden, _) = full_robot();
@@ -204,7 +205,7 @@ fn a_solenoids_thump_before_each_string_is_not_its_onset() {
     assert!(e.missed.is_empty() && e.softest_wrong.is_empty(), "{e:?}");
     let over: Vec<_> = e.strikes.iter().filter(|s| s.2.abs() > 1.5).collect();
     assert!(
-        over.len() <= 2,
+        over.len() <= 3,
         "{} strikes over 1.5 ms: {over:?}",
         over.len()
     );
