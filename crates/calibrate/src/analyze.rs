@@ -3,8 +3,8 @@
 use serde::Serialize;
 
 use crate::fit::{fit, Fit, Measured};
-use crate::listen::listen;
-use crate::score::{Part, Score};
+use crate::listen::{listen, Heard};
+use crate::score::{Part, Score, Strike};
 use crate::strikes::{analyze_outputs, OutputResult};
 use crate::wav::Recording;
 use crate::{onset, sync, CalibrateError};
@@ -214,20 +214,7 @@ pub fn analyze(
 ) -> Result<Calibration, CalibrateError> {
     check(rec, score)?;
     let onsets = onset::broadband(rec);
-    let found = sync::find(&onsets).map_err(|best| CalibrateError::SyncNotFound {
-        best,
-        of: crate::score::SYNC_MARKS_MS.len(),
-    })?;
-    let offset = found.offset_ms;
-    let schedule = score.schedule();
-    let last = schedule.last().map_or(0, |s| s.at_ms);
-    let needed_ms = offset + f64::from(last) + crate::listen::AFTER_MS as f64 + 200.0;
-    if rec.seconds() * 1000.0 < needed_ms {
-        return Err(CalibrateError::TooShort {
-            recording_s: rec.seconds(),
-            needed_s: (needed_ms - offset - f64::from(crate::score::LEAD_IN_MS)) / 1000.0,
-        });
-    }
+    let offset = locate(rec, score, &onsets)?;
     if let Some(a) = anchor {
         if !score.keys().contains(&a.note) && !score.outputs.iter().any(|o| o.note == a.note) {
             return Err(CalibrateError::Anchor(format!(
@@ -236,9 +223,48 @@ pub fn analyze(
             )));
         }
     }
-    // Strikes after the score's end: the recording is of a longer score (other --levels,
-    // another robot's range), or the room was loud after it.
-    let mut warnings = Vec::new();
+    let schedule = score.schedule();
+    let warnings = after_the_end(&onsets, &schedule, offset);
+    let (mut keys, fits): (Vec<KeyResult>, Vec<Option<Fit>>) = score
+        .keys()
+        .map(|note| key(rec, robot, &schedule, offset, (score.low, note)))
+        .unzip();
+    let mut outputs = analyze_outputs(&rec.samples, rec.rate, robot, score, offset);
+    let used = pin(anchor, robot, score, &fits, &outputs)?;
+    let shift = used.0.press_delay_ms - used.1;
+    shift_delays(&mut keys, &mut outputs, shift);
+    Ok(Calibration {
+        capture_offset_ms: offset - shift,
+        anchor: used.0,
+        keys,
+        outputs,
+        warnings,
+    })
+}
+
+/// When the score's time 0 is in the recording, ms, from the sync figure among `onsets`; an
+/// error if it is not found or the recording ends before the score's last strike has rung.
+fn locate(rec: &Recording, score: &Score, onsets: &[onset::Onset]) -> Result<f64, CalibrateError> {
+    let found = sync::find(onsets).map_err(|best| CalibrateError::SyncNotFound {
+        best,
+        of: crate::score::SYNC_MARKS_MS.len(),
+    })?;
+    let offset = found.offset_ms;
+    let last = score.schedule().last().map_or(0, |s| s.at_ms);
+    let needed_ms = offset + f64::from(last) + crate::listen::AFTER_MS as f64 + 200.0;
+    if rec.seconds() * 1000.0 < needed_ms {
+        return Err(CalibrateError::TooShort {
+            recording_s: rec.seconds(),
+            needed_s: (needed_ms - offset - f64::from(crate::score::LEAD_IN_MS)) / 1000.0,
+        });
+    }
+    Ok(offset)
+}
+
+/// Strikes after the score's end: the recording is of a longer score (other --levels,
+/// another robot's range), or the room was loud after it. The warning, if any.
+fn after_the_end(onsets: &[onset::Onset], schedule: &[Strike], offset: f64) -> Vec<String> {
+    let last = schedule.last().map_or(0, |s| s.at_ms);
     let end_s = (offset + f64::from(last) + 700.0) / 1000.0;
     let mut in_score: Vec<f64> = onsets
         .iter()
@@ -250,143 +276,191 @@ pub fn analyze(
         .iter()
         .filter(|o| o.t_s > end_s && o.flux >= 0.5 * typical)
         .count();
-    if after >= 3 {
-        warnings.push(format!(
-            "{after} strikes after the score's end: a recording of a longer score (written with \
-             other --levels, or for another robot)? Its analysis is then wrong"
-        ));
+    if after < 3 {
+        return Vec::new();
     }
-    let low = score.low;
-    let mut keys = Vec::new();
-    let mut fits: Vec<Option<Fit>> = Vec::new();
-    for note in score.keys() {
-        let strikes: Vec<_> = schedule
-            .iter()
-            .filter(|s| s.part == Part::Key && s.note == note)
-            .collect();
-        let expected: Vec<f64> = strikes
-            .iter()
-            .map(|s| f64::from(s.at_ms) + offset)
-            .collect();
-        let heard = listen(
-            &rec.samples,
-            rec.rate,
-            note,
-            &expected,
-            f64::from(crate::score::NOTE_MS),
+    vec![format!(
+        "{after} strikes after the score's end: a recording of a longer score (written with \
+         other --levels, or for another robot)? Its analysis is then wrong"
+    )]
+}
+
+/// One key's strikes heard, measured and fitted (on the analysis' clock): `note`, of a
+/// robot whose lowest key is `low`.
+fn key(
+    rec: &Recording,
+    robot: &orch_robot::Robot,
+    schedule: &[Strike],
+    offset: f64,
+    (low, note): (u8, u8),
+) -> (KeyResult, Option<Fit>) {
+    let strikes: Vec<&Strike> = schedule
+        .iter()
+        .filter(|s| s.part == Part::Key && s.note == note)
+        .collect();
+    let expected: Vec<f64> = strikes
+        .iter()
+        .map(|s| f64::from(s.at_ms) + offset)
+        .collect();
+    let heard = listen(
+        &rec.samples,
+        rec.rate,
+        note,
+        &expected,
+        f64::from(crate::score::NOTE_MS),
+    );
+    let k = note - low;
+    let touch = robot.config.dynamics.keys[usize::from(k)];
+    let mut problems = Vec::new();
+    let (levels, measured): (Vec<Level>, Vec<Measured>) = strikes
+        .iter()
+        .zip(&heard)
+        .map(|(s, h)| level(s, h, &touch, offset, &mut problems))
+        .unzip();
+    let softest_velocity = levels
+        .iter()
+        .find(|l| l.press_delay_ms.is_some())
+        .map(|l| l.velocity);
+    silent_levels(&levels, &measured, softest_velocity, &mut problems);
+    let fitted = if softest_velocity.is_none() {
+        problems.insert(
+            0,
+            "no sound at any level: the key is not calibrated".to_string(),
         );
-        let touch = robot.config.dynamics.keys[usize::from(note - low)];
-        let file = robot.mechanics.for_key(note - low);
-        let mut problems = Vec::new();
-        let mut levels = Vec::new();
-        let mut measured = Vec::new();
-        for (s, h) in strikes.iter().zip(&heard) {
-            let duty = f64::from(
-                touch
-                    .strike_duty(orch_core::Velocity::new(s.velocity).expect("1..=127"))
-                    .get(),
-            ) / 4095.0;
-            let mut level = Level {
-                velocity: s.velocity,
-                duty_percent: duty * 100.0,
-                press_delay_ms: None,
-                level_db: None,
-            };
-            let mut sound = None;
-            let mut level_sigma_db = 0.0;
-            match h.onsets_ms.as_slice() {
-                [] => {}
-                [t] => {
-                    let d = t - f64::from(s.at_ms) - offset;
-                    level.press_delay_ms = Some(d);
-                    level.level_db = h.level_db;
-                    sound = h.level_db.map(|l| (d, l));
-                    level_sigma_db = h.level_sigma_db.unwrap_or(0.0);
-                }
-                many => problems.push(format!(
-                    "velocity {}: {} onsets for one strike (at {}): not fitted",
-                    s.velocity,
-                    many.len(),
-                    many.iter()
-                        .map(|t| format!("{:+.1} ms", t - f64::from(s.at_ms) - offset))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )),
-            }
-            measured.push(Measured {
-                duty,
-                sound,
-                level_sigma_db,
-            });
-            levels.push(level);
-        }
-        let softest_velocity = levels
-            .iter()
-            .find(|l| l.press_delay_ms.is_some())
-            .map(|l| l.velocity);
-        // Strikes with no sound: below the softest (expected, but said), or above it (a fault).
-        for (l, m) in levels.iter().zip(&measured) {
-            if l.press_delay_ms.is_some()
-                || problems
-                    .iter()
-                    .any(|p| p.starts_with(&format!("velocity {}:", l.velocity)))
-            {
-                continue;
-            }
-            match softest_velocity {
-                Some(s) if l.velocity > s => problems.push(format!(
-                    "velocity {}: no sound, though velocity {s} sounded: not fitted",
-                    l.velocity
-                )),
-                Some(_) => problems.push(format!(
-                    "velocity {}: no sound (duty {:.1} %, below the key's softest)",
-                    l.velocity,
-                    m.duty * 100.0
-                )),
-                None => {}
-            }
-        }
-        let fitted = if softest_velocity.is_none() {
-            problems.insert(
-                0,
-                "no sound at any level: the key is not calibrated".to_string(),
-            );
-            None
-        } else {
-            // A silent level above a sounding one is a fault, not a bracket: left out.
-            let usable: Vec<Measured> = measured
-                .iter()
-                .zip(&levels)
-                .filter(|(m, l)| {
-                    m.sound.is_some() || softest_velocity.is_some_and(|s| l.velocity < s)
-                })
-                .map(|(m, _)| *m)
-                .collect();
-            let slope = file.soft_press_delay.as_micros() as f64 / 1000.0
-                - file.press_delay.as_micros() as f64 / 1000.0;
-            fit(&usable, slope).map(|(f, remarks)| {
-                problems.extend(remarks);
-                f
-            })
-        };
-        fits.push(fitted);
-        keys.push(KeyResult {
-            note,
-            levels,
+        None
+    } else {
+        fit_key(
+            &levels,
+            &measured,
             softest_velocity,
-            problems,
-            fit: fitted.map(|f| KeyFigures {
-                press_delay_ms: f.press_delay_ms,
-                soft_press_delay_ms: f.soft_press_delay_ms,
-                softest_percent: f.softest * 100.0,
-                dynamics: !touch.is_full(),
-            }),
-        });
+            robot,
+            k,
+            &mut problems,
+        )
+    };
+    let result = KeyResult {
+        note,
+        levels,
+        softest_velocity,
+        problems,
+        fit: fitted.map(|f| KeyFigures {
+            press_delay_ms: f.press_delay_ms,
+            soft_press_delay_ms: f.soft_press_delay_ms,
+            softest_percent: f.softest * 100.0,
+            dynamics: !touch.is_full(),
+        }),
+    };
+    (result, fitted)
+}
+
+/// One strike `s` of a key played with `touch`, as `h` heard it: its level and measurement;
+/// more than one onset is a problem.
+fn level(
+    s: &Strike,
+    h: &Heard,
+    touch: &orch_core::Touch,
+    offset: f64,
+    problems: &mut Vec<String>,
+) -> (Level, Measured) {
+    let duty = f64::from(
+        touch
+            .strike_duty(orch_core::Velocity::new(s.velocity).expect("1..=127"))
+            .get(),
+    ) / 4095.0;
+    let mut level = Level {
+        velocity: s.velocity,
+        duty_percent: duty * 100.0,
+        press_delay_ms: None,
+        level_db: None,
+    };
+    let mut sound = None;
+    let mut level_sigma_db = 0.0;
+    match h.onsets_ms.as_slice() {
+        [] => {}
+        [t] => {
+            let d = t - f64::from(s.at_ms) - offset;
+            level.press_delay_ms = Some(d);
+            level.level_db = h.level_db;
+            sound = h.level_db.map(|l| (d, l));
+            level_sigma_db = h.level_sigma_db.unwrap_or(0.0);
+        }
+        many => problems.push(format!(
+            "velocity {}: {} onsets for one strike (at {}): not fitted",
+            s.velocity,
+            many.len(),
+            many.iter()
+                .map(|t| format!("{:+.1} ms", t - f64::from(s.at_ms) - offset))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
     }
-    let mut outputs = analyze_outputs(&rec.samples, rec.rate, robot, score, offset);
-    let used = pin(anchor, robot, score, &fits, &outputs)?;
-    let shift = used.0.press_delay_ms - used.1;
-    for k in &mut keys {
+    let measured = Measured {
+        duty,
+        sound,
+        level_sigma_db,
+    };
+    (level, measured)
+}
+
+/// Strikes with no sound: below the softest (expected, but said), or above it (a fault).
+fn silent_levels(
+    levels: &[Level],
+    measured: &[Measured],
+    softest_velocity: Option<u8>,
+    problems: &mut Vec<String>,
+) {
+    for (l, m) in levels.iter().zip(measured) {
+        if l.press_delay_ms.is_some()
+            || problems
+                .iter()
+                .any(|p| p.starts_with(&format!("velocity {}:", l.velocity)))
+        {
+            continue;
+        }
+        match softest_velocity {
+            Some(s) if l.velocity > s => problems.push(format!(
+                "velocity {}: no sound, though velocity {s} sounded: not fitted",
+                l.velocity
+            )),
+            Some(_) => problems.push(format!(
+                "velocity {}: no sound (duty {:.1} %, below the key's softest)",
+                l.velocity,
+                m.duty * 100.0
+            )),
+            None => {}
+        }
+    }
+}
+
+/// The fit of key `k`'s sounding levels (and the silent ones below its softest, which
+/// bracket it), the robot file's slope as its prior; its remarks added to `problems`.
+fn fit_key(
+    levels: &[Level],
+    measured: &[Measured],
+    softest_velocity: Option<u8>,
+    robot: &orch_robot::Robot,
+    k: u8,
+    problems: &mut Vec<String>,
+) -> Option<Fit> {
+    // A silent level above a sounding one is a fault, not a bracket: left out.
+    let usable: Vec<Measured> = measured
+        .iter()
+        .zip(levels)
+        .filter(|(m, l)| m.sound.is_some() || softest_velocity.is_some_and(|s| l.velocity < s))
+        .map(|(m, _)| *m)
+        .collect();
+    let file = robot.mechanics.for_key(k);
+    let slope = file.soft_press_delay.as_micros() as f64 / 1000.0
+        - file.press_delay.as_micros() as f64 / 1000.0;
+    fit(&usable, slope).map(|(f, remarks)| {
+        problems.extend(remarks);
+        f
+    })
+}
+
+/// Every delay and fit moved by `shift`, ms: from the analysis' clock to the anchor's.
+fn shift_delays(keys: &mut [KeyResult], outputs: &mut [OutputResult], shift: f64) {
+    for k in keys {
         for l in &mut k.levels {
             if let Some(d) = &mut l.press_delay_ms {
                 *d += shift;
@@ -397,7 +471,7 @@ pub fn analyze(
             f.soft_press_delay_ms += shift;
         }
     }
-    for o in &mut outputs {
+    for o in outputs {
         for l in &mut o.levels {
             if let Some(d) = &mut l.press_delay_ms {
                 *d += shift;
@@ -408,13 +482,6 @@ pub fn analyze(
             f.soft_flight_ms += shift;
         }
     }
-    Ok(Calibration {
-        capture_offset_ms: offset - shift,
-        anchor: used.0,
-        keys,
-        outputs,
-        warnings,
-    })
 }
 
 /// What pins the delays, and its delay as measured (on the analysis' clock): the anchor's

@@ -135,6 +135,7 @@ pub mod outputs;
 mod robot_strikes;
 pub mod robot_toml;
 pub mod score;
+mod sharp;
 mod spectrum;
 pub mod strikes;
 mod sync;

@@ -178,9 +178,12 @@ fn the_calibrated_robot_toml_puts_the_hidden_robots_onsets_on_time() {
 /// case's low thud, −12 dB against the string at full power, times the duty) in room 3. The
 /// broadband timing took a thump's rise for the onset (24 of the 166 strikes over 1.5 ms, in
 /// every octave, up to 14 ms early, a key's press delay 2.7 ms off); where the string's
-/// periodicity starts later, it is the onset now. Left over: 7 strikes in the two lowest
-/// octaves (soft ones, where the thump is as loud as the string and the strike is timed on
-/// the partials' envelope, and one at velocity 85), up to 14 ms early.
+/// periodicity starts later, it is the onset. A soft strike too weak for the sharp timing
+/// is timed on its periodicity too where that starts over 1.5 ms after the partials'
+/// envelope (the periodicity measured among the key's partials only, so that it rises clear
+/// of the noise), which a bass key's thud moves up to 14 ms early: 7 strikes over 1.5 ms, up
+/// to 14.5 ms, without that; 3 with it, 3.84 ms at most (soft strikes of C♯2, D♯2 and F♯2,
+/// where the thump is 10–20 dB over the string).
 #[test]
 fn a_solenoids_thump_before_each_string_is_not_its_onset() {
     let (hidden, _) = full_robot();
@@ -202,11 +205,12 @@ fn a_solenoids_thump_before_each_string_is_not_its_onset() {
     assert!(e.missed.is_empty() && e.softest_wrong.is_empty(), "{e:?}");
     let over: Vec<_> = e.strikes.iter().filter(|s| s.2.abs() > 1.5).collect();
     assert!(
-        over.len() <= 8,
+        over.len() <= 3,
         "{} strikes over 1.5 ms: {over:?}",
         over.len()
     );
+    assert!(e.delay_max_ms <= 4.0, "{over:?}");
     // From C4 up every strike within 1.5 ms.
     assert!(over.iter().all(|s| s.0 < 60), "{over:?}");
-    assert!(e.press_delay_max_ms <= 2.0, "{e:?}");
+    assert!(e.press_delay_max_ms <= 1.5, "{e:?}");
 }
