@@ -12,8 +12,8 @@
 //! round that a joining peer could take (starting the session itself would start a stopped
 //! one). So every orch peer that plays **announces** the state again when it sees the number
 //! of peers grow: it commits "playing since the same moment" (one µs apart, so that the SDK
-//! sends it), which changes nothing for those that knew, and tells the newcomer; three times,
-//! half a second apart, in case a datagram is lost. A session
+//! sends it), which changes nothing for those that knew, and tells the newcomer; six times,
+//! half a second apart, as a newcomer on a lossy network may take that long to join. A session
 //! played only by other apps (a DAW alone) is not announced again: there a newcomer waits
 //! for the next start.
 
@@ -33,8 +33,10 @@ use crate::LEAD_IN_US;
 /// How often the session is looked at, while waiting and while following.
 pub const LOOK_EVERY: Duration = Duration::from_millis(2);
 
-/// How many times a newcomer is told that the session plays, and how far apart.
-pub const ANNOUNCEMENTS: u32 = 3;
+/// How many times a newcomer is told that the session plays, and how far apart: for three
+/// seconds, as a newcomer takes its time to join the session on a lossy network (it takes no
+/// announcement before it has).
+pub const ANNOUNCEMENTS: u32 = 6;
 /// See [`ANNOUNCEMENTS`].
 pub const ANNOUNCE_EVERY: Duration = Duration::from_millis(500);
 
