@@ -21,10 +21,10 @@ step "install: Debian packages, the firmware's nightly (firmware/install.sh), ru
 # systemd-sysusers): the Raspberry Pi step (scripts/pi.sh) links orch for arm64, runs it, and
 # checks its systemd unit and package. curl: the book's web page chapter scripts `orch serve` with
 # it (tests/book.rs runs every example of the book). cmake (with libclang-dev): the `link`
-# feature's rusty_link builds Ableton's Link SDK with it. iproute2: tests/link.rs puts each
-# Link peer in a network namespace of its own.
+# feature's rusty_link builds Ableton's Link SDK with it. iproute2 and nftables: tests/link.rs
+# puts each Link peer in a network namespace of its own and loses some of its packets.
 bash firmware/install.sh tmux libasound2-dev libclang-dev timgm6mb-soundfont chromium chromium-driver \
-    gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user systemd curl cmake iproute2
+    gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user systemd curl cmake iproute2 nftables
 # pymidi 0.5.0 (PyPI): the independent RTP-MIDI peer of tests/rtpmidi.rs (it imports six
 # without declaring it).
 python3 -c "import pymidi.server, six" 2>/dev/null || python3 -m pip install -q pymidi==0.5.0 six
