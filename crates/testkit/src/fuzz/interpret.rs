@@ -122,6 +122,9 @@ struct Setup {
 impl Setup {
     fn from_header(h: [u8; 4]) -> Self {
         let flags = h[0];
+        // The rest (`max_pulse`, with orch-core's `strike` feature) as by default: built
+        // without that feature, there is no rest.
+        #[allow(clippy::needless_update)]
         let guard = GuardConfig {
             enabled: flags & 0x10 == 0,
             max_hold: (flags & 0x40 == 0).then(|| Duration::from_millis(5 + h[3] as u32)),
@@ -137,7 +140,7 @@ impl Setup {
                     max_on: Duration::from_millis(20 + h[1] as u32),
                 }
             }),
-            max_pulse: GuardConfig::DEFAULT.max_pulse,
+            ..GuardConfig::DEFAULT
         };
         let channels = if flags & 0x04 != 0 {
             ChannelMask(u16::from_le_bytes([h[1], h[1].rotate_left(3)]))
