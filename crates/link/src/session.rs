@@ -12,8 +12,8 @@
 //! round that a joining peer could take (starting the session itself would start a stopped
 //! one). So every orch peer that plays **announces** the state again when it sees the number
 //! of peers grow: it commits "playing since the same moment" (one µs apart, so that the SDK
-//! sends it), which changes nothing for those that knew, and tells the newcomer; six times,
-//! half a second apart, as a newcomer on a lossy network may take that long to join. A session
+//! sends it), which changes nothing for those that knew, and tells the newcomer; and again
+//! every second while it plays, as a newcomer on a lossy network may take seconds to join. A session
 //! played only by other apps (a DAW alone) is not announced again: there a newcomer waits
 //! for the next start.
 
@@ -33,12 +33,10 @@ use crate::LEAD_IN_US;
 /// How often the session is looked at, while waiting and while following.
 pub const LOOK_EVERY: Duration = Duration::from_millis(2);
 
-/// How many times a newcomer is told that the session plays, and how far apart: for three
-/// seconds, as a newcomer takes its time to join the session on a lossy network (it takes no
-/// announcement before it has).
-pub const ANNOUNCEMENTS: u32 = 6;
-/// See [`ANNOUNCEMENTS`].
-pub const ANNOUNCE_EVERY: Duration = Duration::from_millis(500);
+/// How often a playing robot says again that the session plays (besides at once when a peer
+/// joins): a newcomer takes no announcement before it has joined the session, which on a lossy
+/// network may take seconds.
+pub const ANNOUNCE_EVERY: Duration = Duration::from_millis(1_000);
 
 /// How long a leader's session stays open after it stopped the session, for the news to go
 /// out before the process may end (seen: without it, robots on other hosts played on).
@@ -206,11 +204,11 @@ impl FetchNeg for std::sync::atomic::AtomicI64 {
     }
 }
 
-/// Tells each newcomer that the session plays: [`ANNOUNCEMENTS`] times, [`ANNOUNCE_EVERY`]
-/// apart, in case one is lost.
+/// Tells newcomers that the session plays: at once when the number of peers grows, and
+/// again every [`ANNOUNCE_EVERY`] while it plays, so a newcomer that took its time to join (a
+/// lossy network) or missed one hears it within that.
 struct Announcer {
     peers: u64,
-    to_announce: u32,
     announced_at: Instant,
 }
 
@@ -218,7 +216,6 @@ impl Announcer {
     fn new(session: &Session) -> Self {
         Self {
             peers: session.peers(),
-            to_announce: 0,
             announced_at: Instant::now(),
         }
     }
@@ -226,15 +223,12 @@ impl Announcer {
     /// Announces if a newcomer is owed one now: the announcements made (0 or 1).
     fn look(&mut self, session: &Session) -> u64 {
         let peers = session.peers();
-        if peers > self.peers {
-            self.to_announce = ANNOUNCEMENTS;
-        }
+        let grew = peers > self.peers;
         self.peers = peers;
-        if self.to_announce == 0 || self.announced_at.elapsed() < ANNOUNCE_EVERY {
+        if !grew && self.announced_at.elapsed() < ANNOUNCE_EVERY {
             return 0;
         }
         session.announce();
-        self.to_announce -= 1;
         self.announced_at = Instant::now();
         1
     }
@@ -269,7 +263,7 @@ impl Following {
 
 /// Keeps the performance that `control` steers (its clock's zero at `origin`) on the
 /// session's beat as `steer` says, looking every [`LOOK_EVERY`]; stops it, every key up, when
-/// the session stops; announces the session to each newcomer ([`ANNOUNCEMENTS`] times).
+/// the session stops; announces the session to newcomers (see [`ANNOUNCE_EVERY`]).
 pub fn follow(
     session: Arc<Session>,
     control: Arc<Control>,
