@@ -3,7 +3,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-step() { printf '\n==> %s\n' "$*"; }
+step() { printf '\n==> [%4ds] %s\n' "$SECONDS" "$*"; }
 
 # Everything a fresh machine lacks is installed here, before anything builds: every later step
 # (the firmware's lint included) finds its tools in place.
@@ -101,3 +101,4 @@ bash firmware/test.sh
 
 step "Raspberry Pi: orch cross-built for aarch64 and run under qemu (play, analyze, serve and SIGTERM), its .deb installed into a scratch root, its systemd unit verified (scripts/pi.sh)"
 bash scripts/pi.sh
+step "done in ${SECONDS}s"
