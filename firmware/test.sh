@@ -66,7 +66,11 @@ echo "== the Pico firmware in an RP2040 emulator (rp2040js, firmware/rp2040-emu)
     timeout 600 node --test test/*.test.js)
 
 echo "== the orch command, for the thesis's whole chain (tests/chain.rs: orch play -> pty -> simavr)"
-(cd "$here/.." && cargo build --locked -p orch)
+# Built as orch's own tests build it (`cargo test` unifies its dependencies' features with the
+# dev-dependencies', `cargo build` does not): scripts/test.sh's step before this one has, so
+# this builds nothing there (a plain `cargo build -p orch` rebuilt tokio, serde, axum ... and
+# orch, 75 s of the test command).
+(cd "$here/.." && cargo test --locked -p orch --test out --no-run)
 orch_bin="$here/../target/debug/orch"
 
 echo "== hardware-in-the-loop tests (simavr via avr-tester)"

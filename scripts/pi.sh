@@ -13,8 +13,13 @@
 #    the installed binary, verifies the installed unit with `systemd-analyze verify`, and
 #    removes the package again.
 #
+# 4. builds it again with the `link` feature and plays it, under qemu in a network namespace,
+#    in phase with this machine's orch and an independent Link peer (tests/link.rs's
+#    an_arm64_robot_plays_in_phase_under_qemu; run as root, as CI is).
+#
 # It installs nothing: scripts/test.sh's install step does (gcc-aarch64-linux-gnu,
-# libc6-dev-arm64-cross, qemu-user, systemd, the rustup target, cargo-deb).
+# g++-aarch64-linux-gnu, libc6-dev-arm64-cross, qemu-user, systemd, cmake, the rustup target,
+# cargo-deb).
 # The corpus song it plays is in ../shared/midi, beside the checkout, as the tests' corpus is.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -39,7 +44,8 @@ t0=$SECONDS
 took() { printf '    (%d s so far)\n' $((SECONDS - t0)); }
 
 # What it needs, each with the package that brings it.
-for need in aarch64-linux-gnu-gcc:gcc-aarch64-linux-gnu aarch64-linux-gnu-objdump:binutils-aarch64-linux-gnu \
+for need in aarch64-linux-gnu-gcc:gcc-aarch64-linux-gnu aarch64-linux-gnu-g++:g++-aarch64-linux-gnu \
+    aarch64-linux-gnu-objdump:binutils-aarch64-linux-gnu cmake:cmake \
     qemu-aarch64:qemu-user systemd-analyze:systemd systemd-sysusers:systemd dpkg-deb:dpkg python3:python3; do
     command -v "${need%%:*}" >/dev/null ||
         fail "${need%%:*} not found: apt-get install ${need#*:} (scripts/test.sh's install step does)"
@@ -157,6 +163,23 @@ dpkg --root="$root" --force-script-chrootless -r orch >/dev/null
 [ "$(dpkg-query --root="$root" -W -f='${Status}' orch 2>/dev/null)" != "install ok installed" ] ||
     fail "orch is still installed in $root"
 echo "removed"
+took
+
+echo "== Link on arm64: orch built with --features link, run under qemu in a network namespace, in phase with this machine's orch and the independent peer (tests/link.rs)"
+# Ableton's SDK is C++: Debian's g++-aarch64-linux-gnu builds it (rusty_link's cmake), and
+# bindgen reads its C header against the arm64 C library. The package above was made
+# before, from the build without `link`: a binary built with it is GPL (book: orchestra.md).
+export BINDGEN_EXTRA_CLANG_ARGS_aarch64_unknown_linux_gnu="--sysroot=$sysroot"
+cargo build --locked -p orch --bin orch --features link --target "$triple" --profile pi
+# qemu-user 7.2 refuses IP_MULTICAST_IF; the shim answers it (see the file for why nothing
+# is lost by that in the test's namespaces).
+aarch64-linux-gnu-gcc -shared -fPIC -O2 -o "$tmp/multicast_if.so" tests/link/qemu_multicast_if.c -ldl
+printf '#!/bin/sh\nexec qemu-aarch64 -L %q -E LD_PRELOAD=%q %q "$@"\n' \
+    "$sysroot" "$tmp/multicast_if.so" "$(realpath "$bin")" >"$tmp/orch-pi-link"
+chmod +x "$tmp/orch-pi-link"
+# The test binary is the one the workspace's tests built (same packages, features, profile).
+ORCH_ARM64="$tmp/orch-pi-link" cargo test --locked --workspace --all-features --test link -- \
+    --ignored --exact an_arm64_robot_plays_in_phase_under_qemu --nocapture
 took
 
 echo "== scripts/pi.sh: all passed in $((SECONDS - t0)) s"

@@ -17,14 +17,15 @@ step "install: Debian packages, the firmware's nightly (firmware/install.sh), ru
 # General MIDI soundfont `orch render`'s tests play through (6 MB, GPL-2; never committed here:
 # installed in /usr/share/sounds/sf2). chromium and chromium-driver: `orch serve`'s browser tests
 # (tests/serve_browser.rs) drive headless Chromium through chromedriver.
-# gcc-aarch64-linux-gnu, libc6-dev-arm64-cross, qemu-user and systemd (systemd-analyze,
-# systemd-sysusers): the Raspberry Pi step (scripts/pi.sh) links orch for arm64, runs it, and
-# checks its systemd unit and package. curl: the book's web page chapter scripts `orch serve` with
+# gcc-aarch64-linux-gnu, g++-aarch64-linux-gnu, libc6-dev-arm64-cross, qemu-user and systemd
+# (systemd-analyze, systemd-sysusers): the Raspberry Pi step (scripts/pi.sh) links orch for
+# arm64 (with the `link` feature too: Ableton's C++ SDK), runs it, and checks its systemd unit
+# and package. curl: the book's web page chapter scripts `orch serve` with
 # it (tests/book.rs runs every example of the book). cmake (with libclang-dev): the `link`
 # feature's rusty_link builds Ableton's Link SDK with it. iproute2 and nftables: tests/link.rs
 # puts each Link peer in a network namespace of its own and loses some of its packets.
 bash firmware/install.sh tmux libasound2-dev libclang-dev timgm6mb-soundfont chromium chromium-driver \
-    gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user systemd curl cmake iproute2 nftables
+    gcc-aarch64-linux-gnu g++-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user systemd curl cmake iproute2 nftables
 # pymidi 0.5.0 (PyPI): the independent RTP-MIDI peer of tests/rtpmidi.rs (it imports six
 # without declaring it).
 python3 -c "import pymidi.server, six" 2>/dev/null || python3 -m pip install -q pymidi==0.5.0 six
@@ -99,6 +100,6 @@ step "firmware: the thesis's ATmega16 board, built and tested in simavr; the Ras
 (cd firmware/rp2040-emu/expect && cargo fmt -- --check && cargo clippy --all-targets -- -D warnings)
 bash firmware/test.sh
 
-step "Raspberry Pi: orch cross-built for aarch64 and run under qemu (play, analyze, serve and SIGTERM), its .deb installed into a scratch root, its systemd unit verified (scripts/pi.sh)"
+step "Raspberry Pi: orch cross-built for aarch64 and run under qemu (play, analyze, serve and SIGTERM), its .deb installed into a scratch root, its systemd unit verified; built with link, in phase with Link peers (scripts/pi.sh)"
 bash scripts/pi.sh
 step "done in ${SECONDS}s"

@@ -591,6 +591,57 @@ fn a_robot_with_start_starts_the_session_and_comes_in_on_bar_one() {
     let _ = std::fs::remove_file(file);
 }
 
+/// The Raspberry Pi's orch (aarch64, built with `link`) finds the session and plays in phase
+/// with this machine's own. scripts/pi.sh builds it and runs this test with `ORCH_ARM64`
+/// naming a script that runs it under qemu-user; `cargo test` alone skips it.
+#[test]
+#[ignore = "scripts/pi.sh runs it, with ORCH_ARM64 naming its arm64 orch under qemu"]
+fn an_arm64_robot_plays_in_phase_under_qemu() {
+    let arm64 = std::env::var("ORCH_ARM64").expect("ORCH_ARM64: a script running the arm64 orch");
+    let net = Net::new(3);
+    let file = std::env::temp_dir().join(format!("orch-link-{}-arm64.mid", std::process::id()));
+    std::fs::write(&file, testkit::smf::quarters_smf(24, 120.0)).unwrap();
+    let file = file.to_str().unwrap();
+    let mut peer = Peer::start(&net, 0, 2);
+    std::thread::sleep(Duration::from_millis(1_500));
+    let host = robot(&net, 1, file, 9001);
+    let mut args = robot_args(&net, file, 9002, &[]);
+    args.push("--no-compensation".into());
+    let pi = spawn(args, |args| net.command(2, &arm64, args));
+    peer.wait_peers(2);
+    // Under qemu the arm64 robot takes longer to start listening: time to join.
+    std::thread::sleep(Duration::from_secs(2));
+    let started = peer.ask("start");
+    for (name, robot) in [("this machine's", host), ("the arm64", pi)] {
+        let out = exited(robot, Duration::from_secs(30));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{name} robot: {err}");
+    }
+    let all = onsets(&peer.report());
+    let by = |r: usize| all.iter().filter(|o| o.robot == r).copied().collect::<Vec<_>>();
+    let (host, pi) = (by(0), by(1));
+    assert_eq!((host.len(), pi.len()), (24, 24), "{all:?}");
+    // Bar one the same for both, each note on its beat, the two together.
+    let bar_one = ((started[1] + 0.3 * 120.0 / 60.0) / 4.0).ceil() * 4.0;
+    let mut spreads: Vec<f64> = Vec::new();
+    for (h, p) in host.iter().zip(&pi) {
+        assert_eq!((h.note, h.beat.round()), (p.note, p.beat.round()), "{h:?} {p:?}");
+        for o in [h, p] {
+            assert!(o.off_ms().abs() < ON_BEAT_MS, "{o:?}");
+        }
+        spreads.push((h.host_us - p.host_us).abs() / 1e3);
+    }
+    assert_eq!(host[0].beat.round(), bar_one, "{:?}", host[0]);
+    spreads.sort_by(f64::total_cmp);
+    eprintln!(
+        "arm64 (qemu) against this machine's robot: onsets apart median {:.3}, max {:.3} ms over {} beats",
+        percentile(&spreads, 0.5),
+        spreads[spreads.len() - 1],
+        spreads.len()
+    );
+    let _ = std::fs::remove_file(file);
+}
+
 /// `orch conduct --link` leads the session: it starts it for bar one, where its own
 /// performance starts, and publishes the tempo its conductor gives (here OSC tempo
 /// statements), so robots waiting on other hosts come in with it and follow; when its

@@ -29,6 +29,10 @@
 //!
 //! - when **its output strikes again** (one drum, one bar: the new strike takes over its
 //!   vibration, as a key's re-strike does a string's), or
+//! - when its beater **rests on it** too long (the virtual robot's
+//!   [`Press::muted`](orch_sim::Press): powered against the head or bar past its contact
+//!   time): at that moment, the strike plus its `mute_after`, as a damper would, or
+//! - when **its damper** strikes (a damper output of the robot), or
 //! - [`RING_NS`] (8 s) after its strike, which no drum or bar of TimGM6mb outlasts: only a
 //!   font whose strikes sustain (a looped sample held at a level) is cut there, instead of
 //!   piling up voices and ringing to the end of the render.
@@ -328,7 +332,7 @@ pub fn from_robot(
             SoundKind::Up if output.rings => continue,
             SoundKind::Up => None,
             SoundKind::Down => {
-                let (at, strength) = loudness
+                let (at, strength, choked) = loudness
                     .get_mut(usize::from(s.key))
                     .and_then(Vec::pop)
                     .ok_or_else(|| {
@@ -343,9 +347,11 @@ pub fn from_robot(
                         s.key, s.time
                     )));
                 }
-                Some(strength)
+                Some((strength, choked))
             }
         };
+        let choked = strike.and_then(|(_, choked)| choked);
+        let strike = strike.map(|(strength, _)| strength);
         if output.silent {
             // A lift sounds nothing of its own; a damper's strike ends its bar's ring.
             if let (Some(bar), Some(_)) = (output.damps, strike) {
@@ -374,6 +380,11 @@ pub fn from_robot(
         };
         if output.rings {
             rings.strike(usize::from(s.key), event, &mut events);
+            // A beater that rested on its head or bar choked it (the virtual robot's `muted`).
+            if let Some(choked) = choked {
+                let choked_ns = (i128::from(choked) - origin) as i64;
+                rings.damp(usize::from(s.key), choked_ns, &mut events);
+            }
         } else {
             events.push(event);
         }
@@ -388,8 +399,12 @@ pub fn from_robot(
     Ok(events)
 }
 
-/// Each key's sounding presses (time ns, loudness), the earliest last (popped from the back).
-fn sounding_presses(performance: &Performance) -> Result<Vec<Vec<(u64, Loudness)>>, RenderError> {
+/// A sounding press: when it sounded (ns), how loud, and when a beater resting on its head or
+/// bar choked it (ns), if one did.
+type Sounding = (u64, Loudness, Option<u64>);
+
+/// Each key's sounding presses, the earliest last (popped from the back).
+fn sounding_presses(performance: &Performance) -> Result<Vec<Vec<Sounding>>, RenderError> {
     let m = performance.summary.mechanics;
     let downs = performance
         .sounds
@@ -405,15 +420,16 @@ fn sounding_presses(performance: &Performance) -> Result<Vec<Vec<(u64, Loudness)
         .map(|p| p.key)
         .max()
         .map_or(0, |k| k as usize + 1);
-    let mut loudness: Vec<Vec<(u64, Loudness)>> = vec![Vec::new(); keys];
+    let mut loudness: Vec<Vec<Sounding>> = vec![Vec::new(); keys];
     for p in &performance.presses {
         if let (Some(at), Some(v)) = (p.sounded, p.loudness) {
-            loudness[p.key as usize].push((at.as_nanos(), v));
+            let choked = p.muted.map(|c| c.as_nanos());
+            loudness[p.key as usize].push((at.as_nanos(), v, choked));
         }
     }
     for presses in &mut loudness {
         // By the time they sounded (stable: press order at a tie), earliest last.
-        presses.sort_by_key(|&(at, _)| at);
+        presses.sort_by_key(|&(at, _, _)| at);
         presses.reverse();
     }
     Ok(loudness)

@@ -330,6 +330,45 @@ fn a_ringing_output_sounds_past_its_key_up_until_it_strikes_again_or_for_eight_s
 }
 
 #[test]
+fn a_beater_left_on_its_bar_chokes_it_where_the_virtual_robot_says() {
+    // One key held 100 ms at 0.3 s, on a robot whose every output mutes after 20 ms on its
+    // bar: the virtual robot says when it choked (its strike plus 20 ms), and as a bar the
+    // render's sound ends there (within a block and the test font's release), not at the
+    // next strike 8 s on.
+    let song = smf(&[(300, 60, 100, 100)]);
+    let mut sim = orch_sim::SimConfig {
+        keep: orch_sim::Keep::Everything,
+        ..orch_sim::SimConfig::thesis()
+    };
+    sim.mechanics.default.mute_after = Some(orch_core::Duration::from_millis(20));
+    let setup = Setup::new(orch_perform::thesis_config(), sim);
+    let played = Performer::new(&setup, song_events(&song), song.notes())
+        .run()
+        .unwrap();
+    let press = played.performance.presses[0];
+    let (sounded, choked) = (press.sounded.unwrap(), press.muted.expect("muted"));
+    assert_eq!(choked.nanos_since(sounded), 20_000_000);
+    let bars: Vec<events::Output> = (0..61)
+        .map(|k| events::Output::bar(events::Instrument::Program(9), 36 + k as u8))
+        .collect();
+    let keys = events::from_robot(&played.performance, played.start_us, &bars, &[]).unwrap();
+    let (mut l, mut r) = (Vec::new(), Vec::new());
+    synth::render(&support::square_font(RATE), &keys, &Settings::default(), |a, b| {
+        l.extend_from_slice(a);
+        r.extend_from_slice(b);
+        Ok(())
+    })
+    .unwrap();
+    let at = |ns: u64| ((ns - played.start_us * 1000) * u64::from(RATE) / 1_000_000_000) as usize;
+    let last = (0..l.len()).rev().find(|&k| l[k] != 0.0 || r[k] != 0.0).unwrap();
+    let choke = at(choked.as_nanos());
+    assert!(
+        last >= choke && last < choke + 64 + 331 + 64,
+        "the bar sounds until sample {last}; choked at {choke}"
+    );
+}
+
+#[test]
 fn a_drums_release_does_not_touch_a_piano_key_of_the_same_note() {
     // The piano's 60 held from 0 to 2 s; the drum kit's 60 from sample 22 080 (the same
     // synthesizer: 345 blocks on) to 1 s. Both at full loudness, where the nearest channel

@@ -277,8 +277,9 @@ pub struct Press {
     /// It made no sound because its duty was below the key's softest.
     pub too_soft: bool,
     /// A beater that sounded but stayed powered against its head or bar past its
-    /// `mute_after`: the sound was choked.
-    pub muted: bool,
+    /// `mute_after`: when that choked the sound (its strike plus `mute_after`); `None` when it
+    /// was not choked.
+    pub muted: Option<SimTime>,
     /// A wind robot's valve that opened before its fingers had settled, or stayed open while
     /// a finger moved: the note cracked, no note was heard ([`wind`](crate::wind)).
     pub cracked: bool,
@@ -537,11 +538,11 @@ impl Mechanics {
         let sounds = long && !too_soft && !cracked;
         let delay = figures.press_delay_at(heard);
         // Powered on past its contact by more than it may be: the bar is choked.
-        let muted = sounds
-            && figures.mute_after.is_some_and(|m| {
-                time.nanos_since(since) > (delay.as_micros() as u64 + m.as_micros() as u64) * 1_000
-            });
-        self.stats.muted += u64::from(muted);
+        let muted = figures
+            .mute_after
+            .map(|m| since + delay + m)
+            .filter(|&choked| sounds && time > choked);
+        self.stats.muted += u64::from(muted.is_some());
         self.stats.cracked += u64::from(cracked);
         self.presses.push(Press {
             key,
@@ -645,15 +646,16 @@ mod tests {
             m.edge(ms(at), 0, true);
             m.edge(ms(at + len), 0, false);
         }
-        let muted: Vec<bool> = m.presses().iter().map(|p| p.muted).collect();
-        assert_eq!(muted, [false, false, true]);
+        let muted: Vec<_> = m.presses().iter().map(|p| p.muted).collect();
+        // Choked when it had rested on the bar 10 ms: 6 ms flight, then 10 ms.
+        assert_eq!(muted, [None, None, Some(ms(216))]);
         assert!(m.presses().iter().all(|p| p.sounded.is_some()));
         assert_eq!(m.stats().muted, 1);
         // A key (no mute_after) is never muted however long it is held.
         let mut k = Mechanics::new(1, &MechanicsConfig::default());
         k.edge(ms(0), 0, true);
         k.edge(ms(5_000), 0, false);
-        assert!(!k.presses()[0].muted);
+        assert_eq!(k.presses()[0].muted, None);
     }
 
     #[test]
