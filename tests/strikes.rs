@@ -109,7 +109,10 @@ fn a_velocity_sweep_strikes_ever_harder_and_every_isolated_strike_is_on_time() {
                 energy >= last,
                 "{kind:?}: velocity {v} struck with less energy ({energy}) than the one before ({last})"
             );
-            assert!(p.sounded.is_some() && p.muted.is_none(), "{kind:?}: velocity {v}");
+            assert!(
+                p.sounded.is_some() && p.muted.is_none(),
+                "{kind:?}: velocity {v}"
+            );
             last = energy;
         }
         // The loudest strike is the soft one's 20 / 8 ms long (and at full duty on PWM).

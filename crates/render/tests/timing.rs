@@ -353,14 +353,22 @@ fn a_beater_left_on_its_bar_chokes_it_where_the_virtual_robot_says() {
         .collect();
     let keys = events::from_robot(&played.performance, played.start_us, &bars, &[]).unwrap();
     let (mut l, mut r) = (Vec::new(), Vec::new());
-    synth::render(&support::square_font(RATE), &keys, &Settings::default(), |a, b| {
-        l.extend_from_slice(a);
-        r.extend_from_slice(b);
-        Ok(())
-    })
+    synth::render(
+        &support::square_font(RATE),
+        &keys,
+        &Settings::default(),
+        |a, b| {
+            l.extend_from_slice(a);
+            r.extend_from_slice(b);
+            Ok(())
+        },
+    )
     .unwrap();
     let at = |ns: u64| ((ns - played.start_us * 1000) * u64::from(RATE) / 1_000_000_000) as usize;
-    let last = (0..l.len()).rev().find(|&k| l[k] != 0.0 || r[k] != 0.0).unwrap();
+    let last = (0..l.len())
+        .rev()
+        .find(|&k| l[k] != 0.0 || r[k] != 0.0)
+        .unwrap();
     let choke = at(choked.as_nanos());
     assert!(
         last >= choke && last < choke + 64 + 331 + 64,
