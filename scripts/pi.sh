@@ -7,7 +7,8 @@
 # 2. runs it under qemu-user (scripts/pi_check.py): `orch play --fast` and `orch analyze
 #    --json` (every count adds up, and the same reports as this machine's own build), then
 #    `orch serve` answering its page and JSON API, playing, and ending on SIGTERM with exit 0
-#    and every key released; and checks that the checker fails on a broken report;
+#    and every key released; and checks that the checker fails on a broken report; and runs
+#    tests/rtpmidi.rs with it (RTP-MIDI in and out against independent peers);
 # 3. packs it with cargo-deb (Cargo.toml's [package.metadata.deb]), installs the package into
 #    a scratch root with dpkg (its maintainer scripts run: the user orch in the i2c group), runs
 #    the installed binary, verifies the installed unit with `systemd-analyze verify`, and
@@ -97,6 +98,11 @@ echo "refused, as it should be: $(tail -1 "$tmp/broken.err")"
 
 echo "== under qemu: orch serve, its page and API, a song played, SIGTERM"
 python3 scripts/pi_check.py serve --orch "$tmp/orch-pi" "${songs[0]}"
+took
+
+echo "== under qemu: RTP-MIDI in and out against independent peers (tests/rtpmidi.rs, the Pi's orch)"
+# The test binary is the one the workspace's tests built (same packages, features, profile).
+ORCH_ARM64="$tmp/orch-pi" cargo test --locked --workspace --all-features --test rtpmidi
 took
 
 echo "== the .deb (cargo-deb), for arm64"

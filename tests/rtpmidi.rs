@@ -8,6 +8,9 @@
 //!   send MIDI (its client is a stub), and so sends no recovery journal either.
 //!
 //! pymidi is installed here when it is missing (`pip install pymidi==0.5.0 six`).
+//!
+//! scripts/pi.sh runs these tests again with `ORCH_ARM64` naming a script that runs the
+//! Raspberry Pi's orch (aarch64) under qemu-user: the same tests of the Pi's build.
 
 mod support;
 
@@ -18,7 +21,10 @@ use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
 
-const ORCH: &str = env!("CARGO_BIN_EXE_orch");
+/// The orch under test: this build's, or the one `ORCH_ARM64` names (scripts/pi.sh).
+fn orch() -> Command {
+    Command::new(std::env::var_os("ORCH_ARM64").unwrap_or(env!("CARGO_BIN_EXE_orch").into()))
+}
 const PEER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/rtpmidi/peer.py");
 const SERVER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/rtpmidi/server.py");
 
@@ -64,7 +70,7 @@ fn orch_run(robot: Option<&str>) -> (Child, Lines, Arc<Mutex<String>>, u16) {
     if let Some(r) = robot {
         args.extend(["--robot", r]);
     }
-    let mut child = Command::new(ORCH)
+    let mut child = orch()
         .args(&args)
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
@@ -179,7 +185,7 @@ fn stop(mut child: Child, lines: &Lines) -> Value {
 /// Robot files: the thesis's robot with its guard timeless (a second note on a key joins it,
 /// no rest before a re-strike), optionally with the sustain pedal obeyed.
 fn robot(sustain: bool) -> std::path::PathBuf {
-    let out = Command::new(ORCH).arg("config").output().unwrap();
+    let out = orch().arg("config").output().unwrap();
     let mut toml = String::from_utf8(out.stdout)
         .unwrap()
         .replace("overlap = \"restrike\"", "overlap = \"hold\"")
@@ -242,7 +248,7 @@ fn ode_to_joy() -> Vec<u8> {
 }
 
 fn interpret_outputs(bytes: &[u8], robot: &str) -> Vec<W> {
-    let mut c = Command::new(ORCH)
+    let mut c = orch()
         .args(["interpret", "-", "--json", "--robot", robot])
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
@@ -483,7 +489,7 @@ fn orch_play_into_pymidis_server_sends_what_udp_sends() {
     };
     let song = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/ode-to-joy.mid");
     let play = |out: &str| {
-        let s = Command::new(ORCH)
+        let s = orch()
             .args(["play", song, "--tempo", "8", "--no-view", "--out", out])
             .output()
             .unwrap();
