@@ -86,10 +86,10 @@ cargo test --workspace --all-features
 step "orch without its optional features: a missing feature is named (--mic, --out alsa:, --in alsa:, --link)"
 # The tests above build orch with every feature; these three check the message of a build
 # without them, which is what `cargo install` gives.
-cargo test -p orch --test calibrate_mic mic_without_the_feature_names_it
-cargo test -p orch --test out bad_outs_are_refused_with_exit_2
-cargo test -p orch --test run bad_input_or_output_exits_2
-cargo test -p orch --test link_cli link_without_the_feature_names_it_and_its_licence
+# One cargo, four test files, one filter each (a filter matches nothing in the other files).
+cargo test -p orch --test calibrate_mic --test out --test run --test link_cli -- --exact \
+    mic_without_the_feature_names_it bad_outs_are_refused_with_exit_2 \
+    bad_input_or_output_exits_2 link_without_the_feature_names_it_and_its_licence
 
 step "orch-baton: every generated conductor video at 30 and 60 fps (heavy: release)"
 cargo test -p orch-baton --release --test videos -- --ignored

@@ -50,8 +50,16 @@ fn render_with(
     font: std::sync::Arc<orch_render::SoundFont>,
 ) -> (Vec<f32>, Vec<f32>) {
     let keys = events::from_performance(&played.performance, played.start_us, 36).unwrap();
+    render_keys(&font, &keys)
+}
+
+/// `keys` rendered with `font` at the default settings, both channels.
+fn render_keys(
+    font: &std::sync::Arc<orch_render::SoundFont>,
+    keys: &[events::KeyEvent],
+) -> (Vec<f32>, Vec<f32>) {
     let (mut l, mut r) = (Vec::new(), Vec::new());
-    synth::render(&font, &keys, &Settings::default(), |a, b| {
+    synth::render(font, keys, &Settings::default(), |a, b| {
         l.extend_from_slice(a);
         r.extend_from_slice(b);
         Ok(())
@@ -250,18 +258,7 @@ fn a_strikes_level_follows_its_exact_loudness_between_whole_steps() {
             action: events::Action::Release,
         });
     }
-    let (mut l, mut r) = (Vec::new(), Vec::new());
-    synth::render(
-        &support::square_font(RATE),
-        &keys,
-        &Settings::default(),
-        |a, b| {
-            l.extend_from_slice(a);
-            r.extend_from_slice(b);
-            Ok(())
-        },
-    )
-    .unwrap();
+    let (l, r) = render_keys(&support::square_font(RATE), &keys);
     // Each strike's level in the audio, against its exact loudness's: the same offset for
     // every strike, within 0.08 dB (the channels' expression ladder: each within 0.04 dB; at
     // whole velocity steps, a step here is 0.65 dB).
@@ -291,19 +288,7 @@ fn a_ringing_output_sounds_past_its_key_up_until_it_strikes_again_or_for_eight_s
     let keys = 61;
     let render_as = |outputs: &[events::Output]| {
         let keys = events::from_robot(&played.performance, played.start_us, outputs, &[]).unwrap();
-        let (mut l, mut r) = (Vec::new(), Vec::new());
-        synth::render(
-            &support::square_font(RATE),
-            &keys,
-            &Settings::default(),
-            |a, b| {
-                l.extend_from_slice(a);
-                r.extend_from_slice(b);
-                Ok(())
-            },
-        )
-        .unwrap();
-        (l, r)
+        render_keys(&support::square_font(RATE), &keys)
     };
     let at = |ms: usize| ms * RATE as usize / 1000;
     let (l, r) = render_as(&events::keyboard(36, keys));
@@ -352,18 +337,7 @@ fn a_beater_left_on_its_bar_chokes_it_where_the_virtual_robot_says() {
         .map(|k| events::Output::bar(events::Instrument::Program(9), 36 + k as u8))
         .collect();
     let keys = events::from_robot(&played.performance, played.start_us, &bars, &[]).unwrap();
-    let (mut l, mut r) = (Vec::new(), Vec::new());
-    synth::render(
-        &support::square_font(RATE),
-        &keys,
-        &Settings::default(),
-        |a, b| {
-            l.extend_from_slice(a);
-            r.extend_from_slice(b);
-            Ok(())
-        },
-    )
-    .unwrap();
+    let (l, r) = render_keys(&support::square_font(RATE), &keys);
     let at = |ns: u64| ((ns - played.start_us * 1000) * u64::from(RATE) / 1_000_000_000) as usize;
     let last = (0..l.len())
         .rev()
@@ -401,18 +375,7 @@ fn a_drums_release_does_not_touch_a_piano_key_of_the_same_note() {
         release(2_000_000_000, events::Instrument::PIANO),
     ];
     assert_eq!(keys[1].sample(RATE) % synth::PHASES as u64, 0);
-    let (mut l, mut r) = (Vec::new(), Vec::new());
-    synth::render(
-        &support::square_font(RATE),
-        &keys,
-        &Settings::default(),
-        |a, b| {
-            l.extend_from_slice(a);
-            r.extend_from_slice(b);
-            Ok(())
-        },
-    )
-    .unwrap();
+    let (l, r) = render_keys(&support::square_font(RATE), &keys);
     let at = |ms: usize| ms * RATE as usize / 1000;
     let alone = onset::rms(&l, &r, at(100), at(400));
     let after = onset::rms(&l, &r, at(1200), at(1900));
