@@ -60,39 +60,6 @@ impl Drop for Killed {
     }
 }
 
-/// The arrival of each Note-On (velocity above 0) in the datagrams `socket` receives, under
-/// running status.
-fn note_ons(socket: UdpSocket, tx: mpsc::Sender<Instant>) {
-    let mut buf = [0u8; 2048];
-    let (mut status, mut data) = (0u8, Vec::new());
-    while let Ok(n) = socket.recv(&mut buf) {
-        let at = Instant::now();
-        for &b in &buf[..n] {
-            match b {
-                0xF8..=0xFF => {}
-                0x80..=0xF7 => {
-                    status = b;
-                    data.clear();
-                }
-                _ => {
-                    data.push(b);
-                    let len = if matches!(status & 0xF0, 0xC0 | 0xD0) {
-                        1
-                    } else {
-                        2
-                    };
-                    if data.len() == len {
-                        if status & 0xF0 == 0x90 && data[1] > 0 && tx.send(at).is_err() {
-                            return;
-                        }
-                        data.clear();
-                    }
-                }
-            }
-        }
-    }
-}
-
 fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1000.0
 }
@@ -137,7 +104,7 @@ fn main() {
     // real-time priority where allowed, as orch's are: the busy threads delay neither.
     std::thread::spawn(move || {
         orch_perform::realtime::raise_priority();
-        note_ons(sink, tx)
+        support::note_on_arrivals(sink, tx)
     });
     orch_perform::realtime::raise_priority();
     let osc_port = free_port();

@@ -310,38 +310,6 @@ fn bad_sources_exit_2() {
     }
 }
 
-/// The arrival of each Note-On (velocity above 0) in the datagrams `socket` receives.
-fn note_on_arrivals(socket: std::net::UdpSocket, tx: std::sync::mpsc::Sender<Instant>) {
-    let mut buf = [0u8; 2048];
-    let (mut status, mut data) = (0u8, Vec::new());
-    while let Ok(n) = socket.recv(&mut buf) {
-        let at = Instant::now();
-        for &b in &buf[..n] {
-            match b {
-                0xF8..=0xFF => {}
-                0x80..=0xF7 => {
-                    status = b;
-                    data.clear();
-                }
-                _ => {
-                    data.push(b);
-                    let len = if matches!(status & 0xF0, 0xC0 | 0xD0) {
-                        1
-                    } else {
-                        2
-                    };
-                    if data.len() == len {
-                        if status & 0xF0 == 0x90 && data[1] > 0 && tx.send(at).is_err() {
-                            return;
-                        }
-                        data.clear();
-                    }
-                }
-            }
-        }
-    }
-}
-
 #[test]
 fn osc_beats_over_loopback_changing_from_100_to_130_bpm_are_followed_within_25_ms() {
     // On the real clock: `orch conduct` plays 40 quarters written at 100 BPM, each message
@@ -362,7 +330,7 @@ fn osc_beats_over_loopback_changing_from_100_to_130_bpm_are_followed_within_25_m
     // make the stamps late.
     std::thread::spawn(move || {
         orch_perform::realtime::raise_priority();
-        note_on_arrivals(sink, tx)
+        support::note_on_arrivals(sink, tx)
     });
     orch_perform::realtime::raise_priority();
     let port = std::net::UdpSocket::bind("127.0.0.1:0")

@@ -52,3 +52,39 @@ pub fn collect_stderr(
     });
     (text, rx)
 }
+
+/// The arrival of each Note-On (velocity above 0) in the MIDI datagrams `socket` receives,
+/// under running status, each sent on `tx` until it hangs up.
+pub fn note_on_arrivals(
+    socket: std::net::UdpSocket,
+    tx: std::sync::mpsc::Sender<std::time::Instant>,
+) {
+    let mut buf = [0u8; 2048];
+    let (mut status, mut data) = (0u8, Vec::new());
+    while let Ok(n) = socket.recv(&mut buf) {
+        let at = std::time::Instant::now();
+        for &b in &buf[..n] {
+            match b {
+                0xF8..=0xFF => {}
+                0x80..=0xF7 => {
+                    status = b;
+                    data.clear();
+                }
+                _ => {
+                    data.push(b);
+                    let len = if matches!(status & 0xF0, 0xC0 | 0xD0) {
+                        1
+                    } else {
+                        2
+                    };
+                    if data.len() == len {
+                        if status & 0xF0 == 0x90 && data[1] > 0 && tx.send(at).is_err() {
+                            return;
+                        }
+                        data.clear();
+                    }
+                }
+            }
+        }
+    }
+}
