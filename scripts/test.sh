@@ -84,7 +84,7 @@ step "tests (every fuzz corpus and crash regression is replayed by the fuzz_repl
 cargo test --workspace --all-features
 
 step "orch without its optional features: a missing feature is named (--mic, --out alsa:, --in alsa:, --link)"
-# The tests above build orch with every feature; these three check the message of a build
+# The tests above build orch with every feature; these four check the message of a build
 # without them, which is what `cargo install` gives.
 # One cargo, four test files, one filter each (a filter matches nothing in the other files).
 cargo test -p orch --test calibrate_mic --test out --test run --test link_cli -- --exact \
