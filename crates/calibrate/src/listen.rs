@@ -484,8 +484,8 @@ fn time_unsharp(strikes: &mut [Strike]) {
             }
             let guess = offset.map(|offset| t.t_env + offset);
             *o = match (t.sharp.and_then(|s| s.periodic), guess) {
-                (Some(p), Some(g)) if p - g <= SOFT_THUMP_SHIFT_MS => g,
-                (Some(p), _) => p,
+                (Some((p, _)), Some(g)) if p - g <= SOFT_THUMP_SHIFT_MS => g,
+                (Some((_, string)), _) => string,
                 (None, Some(g)) => g,
                 (None, None) => t.t_env,
             };
