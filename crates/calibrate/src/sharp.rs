@@ -279,7 +279,7 @@ fn string_onset(
 /// the onset where it first rises a fifth of the way from one to the other within ±12 ms of
 /// `t`, and stays there 5 ms. Broadband, that rise can be a thump's a few ms before the
 /// string: where the string's periodicity in the same band ([`periodic_onset`]) starts more
-/// than [`THUMP_SHIFT_MS`] later, that is the onset. Returns the onset, how many times the
+/// than [`THUMP_SHIFT_MS`] later, the onset is the string's ([`string_onset`]). Returns the onset, how many times the
 /// energy rose (`None` if it did not).
 pub(crate) fn refine(x: &[f32], rate: u32, note: u8, t: f64) -> Option<Sharp> {
     let per_ms = f64::from(rate) / 1000.0;
