@@ -81,8 +81,9 @@
 //!   envelope's onset. A solenoid's thump 2–5 ms before the string runs into the string
 //!   without falling back, so the onset is also looked for where the string's *periodicity*
 //!   starts (the high-passed signal times itself a whole number of the key's periods later:
-//!   a thump does not repeat); where that comes more than 1 ms after the energy's rise (3 ms
-//!   after a soft strike's envelope timing), it is the onset. Soft strikes in the two lowest
+//!   a thump does not repeat); where that comes more than 1 ms after the energy's rise (1.5
+//!   ms after a soft strike's envelope timing), it is the onset, or where the periodicity a
+//!   period further on starts, if that is earlier and still after the energy's rise. Soft strikes in the two lowest
 //!   octaves, where the thump's low thud is as loud as the string in the key's own bands,
 //!   can still come out a few ms off (`--bench thump`). The thump is not measured.
 //! - **A neighbour's decay still ringing**: keys are struck in order, a second apart, each

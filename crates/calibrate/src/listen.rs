@@ -63,7 +63,10 @@
 //!   ms window: before the string that product has no sign of its own, from the string on it
 //!   is the string's energy. Where it rises (the same fifth of the way, the same 5 ms) more
 //!   than 1 ms after the energy, the onset is there (if it rose 15 robust standard deviations
-//!   over its level before: in noise it is not to be trusted). A strike timed on the envelope
+//!   over its level before: in noise it is not to be trusted); or where the periodicity a
+//!   period further on starts, if earlier and still over 1 ms after the energy
+//!   ([`string_onset`](crate::sharp::string_onset): at one lag the thud, still ringing under
+//!   the string's first period, can hold the rise back a few ms). A strike timed on the envelope
 //!   whose periodicity rose clear and starts more than 1.5 ms after that timing is timed on
 //!   the periodicity: in a bass key's bands, about as wide as its first partial, the thud and
 //!   the string are one rise, and at a soft strike the thud is 10–20 dB over the string there
@@ -484,8 +487,8 @@ fn time_unsharp(strikes: &mut [Strike]) {
             }
             let guess = offset.map(|offset| t.t_env + offset);
             *o = match (t.sharp.and_then(|s| s.periodic), guess) {
-                (Some(p), Some(g)) if p - g <= SOFT_THUMP_SHIFT_MS => g,
-                (Some(p), _) => p,
+                (Some((p, _)), Some(g)) if p - g <= SOFT_THUMP_SHIFT_MS => g,
+                (Some((_, string)), _) => string,
                 (None, Some(g)) => g,
                 (None, None) => t.t_env,
             };

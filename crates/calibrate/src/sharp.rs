@@ -10,8 +10,9 @@ use crate::onset::{median, robust_sigma};
 pub(crate) struct Sharp {
     /// The onset, ms in the recording.
     pub t: f64,
-    /// Where the string's periodicity starts, ms ([`periodic_onset`]).
-    pub periodic: Option<f64>,
+    /// Where the string's periodicity starts, ms ([`periodic_onset`]), and where the string
+    /// is timed when it is ([`string_onset`]).
+    pub periodic: Option<(f64, f64)>,
     /// How many times the high-passed energy rose.
     ratio: f64,
 }
@@ -201,8 +202,14 @@ fn band(
 /// not repeat at the key's period: a solenoid's thump a few ms before the string is the
 /// case); from the string on it is the string's energy. Returns the onset, ms (`None` also
 /// where the rise is under [`PERIODIC_CLEAR`]).
-fn periodic_onset(x: &[f32], rate: u32, f0: f64, t: f64, cutoff_hz: f64) -> Option<f64> {
-    let min_lag_ms = PERIODIC_MIN_LAG_MS;
+fn periodic_onset(
+    x: &[f32],
+    rate: u32,
+    f0: f64,
+    t: f64,
+    cutoff_hz: f64,
+    min_lag_ms: f64,
+) -> Option<f64> {
     let per_ms = f64::from(rate) / 1000.0;
     let period = 1000.0 / f0;
     let max_lag_ms = ((min_lag_ms / period).ceil().max(1.0) * period) * 1.03;
@@ -242,13 +249,37 @@ fn periodic_onset(x: &[f32], rate: u32, f0: f64, t: f64, cutoff_hz: f64) -> Opti
     Some((from as f64 + i) / per_ms)
 }
 
+/// Where the string is timed once its periodicity starts at `periodic` (ms, measured one
+/// lag later: [`periodic_onset`]), the high-passed energy rising at `t_e`: the periodicity
+/// a period further on, if it starts earlier and still over [`THUMP_SHIFT_MS`] after
+/// `t_e` (a thump's rise), else `periodic`. At one lag the thump's low thud, still ringing
+/// under the string's first period, times the string a period later with a sign of its own
+/// for a few ms and can hold the periodicity's rise back (F2, 87 Hz, whose lag is one
+/// period, 1.7–3.0 ms late in a reverberant room); a period further on the thud has decayed
+/// (the lag then is the earliest of the two consistent with the string).
+fn string_onset(
+    x: &[f32],
+    rate: u32,
+    f0: f64,
+    t: f64,
+    cutoff_hz: f64,
+    periodic: f64,
+    t_e: f64,
+) -> f64 {
+    let further = PERIODIC_MIN_LAG_MS + 1000.0 / f0;
+    match periodic_onset(x, rate, f0, t, cutoff_hz, further) {
+        Some(p) if p < periodic && p - t_e > THUMP_SHIFT_MS => p,
+        _ => periodic,
+    }
+}
+
 /// The onset near `t` (ms, the envelope's) timed on the recording high-passed at the key's
 /// 4th partial (200 Hz at least, zero-phase): its energy over a centred 3 ms window; its
 /// level before (the median from 50 to 15 ms before `t`) and after (from 2 to 20 ms after);
 /// the onset where it first rises a fifth of the way from one to the other within ±12 ms of
 /// `t`, and stays there 5 ms. Broadband, that rise can be a thump's a few ms before the
 /// string: where the string's periodicity in the same band ([`periodic_onset`]) starts more
-/// than [`THUMP_SHIFT_MS`] later, that is the onset. Returns the onset, how many times the
+/// than [`THUMP_SHIFT_MS`] later, the onset is the string's ([`string_onset`]). Returns the onset, how many times the
 /// energy rose (`None` if it did not).
 pub(crate) fn refine(x: &[f32], rate: u32, note: u8, t: f64) -> Option<Sharp> {
     let per_ms = f64::from(rate) / 1000.0;
@@ -267,9 +298,10 @@ pub(crate) fn refine(x: &[f32], rate: u32, note: u8, t: f64) -> Option<Sharp> {
     let rise = pre + SHARP_FRACTION * (post - pre);
     let i = first_sustained(&e, rise, at(t - 12.0), at(t + 12.0), sustain)?;
     let t_e = (from as f64 + i) / per_ms;
-    let periodic = periodic_onset(x, rate, f0, t, cutoff);
+    let periodic = periodic_onset(x, rate, f0, t, cutoff, PERIODIC_MIN_LAG_MS)
+        .map(|t_p| (t_p, string_onset(x, rate, f0, t, cutoff, t_p, t_e)));
     let t = match periodic {
-        Some(t_p) if t_p - t_e > THUMP_SHIFT_MS => t_p,
+        Some((t_p, string)) if t_p - t_e > THUMP_SHIFT_MS => string,
         _ => t_e,
     };
     Some(Sharp {

@@ -6,7 +6,7 @@
 
 mod support;
 
-use orch_calibrate::synthetic::{errors, Solenoid};
+use orch_calibrate::synthetic::{errors, Errors, Solenoid};
 use orch_calibrate::{analyze, robot_toml, Anchor, Calibration, Score};
 use orch_robot::Robot;
 use orch_seq::Song;
@@ -175,42 +175,55 @@ fn the_calibrated_robot_toml_puts_the_hidden_robots_onsets_on_time() {
 }
 
 /// Issue 26: a solenoid's thump 2–5 ms before each string (`Solenoid::ROBOT`: a click and the
-/// case's low thud, −12 dB against the string at full power, times the duty) in room 3. The
-/// broadband timing took a thump's rise for the onset (24 of the 166 strikes over 1.5 ms, in
-/// every octave, up to 14 ms early, a key's press delay 2.7 ms off); where the string's
-/// periodicity starts later, it is the onset. A soft strike too weak for the sharp timing
-/// is timed on its periodicity too where that starts over 1.5 ms after the partials'
-/// envelope (the periodicity measured among the key's partials only, so that it rises clear
-/// of the noise), which a bass key's thud moves up to 14 ms early: 7 strikes over 1.5 ms, up
-/// to 14.5 ms, without that; 3 with it, 3.84 ms at most (soft strikes of C♯2, D♯2 and F♯2,
-/// where the thump is 10–20 dB over the string).
+/// case's low thud, −12 dB against the string at full power, times the duty) in room 3 and
+/// room 1. The broadband timing took a thump's rise for the onset (in room 3, 24 of the 166
+/// strikes over 1.5 ms, in every octave, up to 14 ms early, a key's press delay 2.7 ms off);
+/// where the string's periodicity starts later, it is the onset. A soft strike too weak for
+/// the sharp timing is timed on its periodicity too where that starts over 1.5 ms after the
+/// partials' envelope (the periodicity measured among the key's partials only, so that it
+/// rises clear of the noise), which a bass key's thud moves up to 14 ms early: 7 strikes over
+/// 1.5 ms, up to 14.5 ms, without that; 3 with it, 3.84 ms at most (soft strikes of C♯2, D♯2
+/// and F♯2, where the thump is 10–20 dB over the string). The periodicity a period further
+/// on times the string where it starts earlier and still after the thump's rise (at one lag
+/// the thud can hold the rise back: F2 in room 1 came out 1.7–3.0 ms late): room 3, 2 over
+/// (C♯2 at velocity 43, 1.54 ms early; F♯2 at 1, 3.83 ms), press delays within 1.17 ms; room
+/// 1, 3 over (D♯2 at 1, C♯3 and D3 at 43: up to 7.51 ms early, their periodicity not clear or
+/// early), press delays within 1.97 ms (with one lag: 3 and 5 over).
 #[test]
 fn a_solenoids_thump_before_each_string_is_not_its_onset() {
+    // (room, strikes over 1.5 ms, the largest error, the largest press delay error)
+    for (seed, most_over, max_ms, press_ms) in [(3, 2, 4.0, 1.25), (1, 3, 8.0, 2.1)] {
+        let e = thump_errors(seed);
+        assert!(e.missed.is_empty() && e.softest_wrong.is_empty(), "{e:?}");
+        let over: Vec<_> = e.strikes.iter().filter(|s| s.2.abs() > 1.5).collect();
+        assert!(
+            over.len() <= most_over,
+            "room {seed}: {} strikes over 1.5 ms: {over:?}",
+            over.len()
+        );
+        assert!(e.delay_max_ms <= max_ms, "room {seed}: {over:?}");
+        // From C4 up every strike within 1.5 ms.
+        assert!(over.iter().all(|s| s.0 < 60), "room {seed}: {over:?}");
+        assert!(e.press_delay_max_ms <= press_ms, "room {seed}: {e:?}");
+    }
+}
+
+/// The errors of the 61-key robot's calibration in room `seed` with `Solenoid::ROBOT`'s thump.
+fn thump_errors(seed: u64) -> Errors {
     let (hidden, _) = full_robot();
     let room = Room {
         thump: Some(Solenoid::ROBOT),
-        ..room(3)
+        ..room(seed)
     };
     let cal = calibrate(&pwm_text(), hidden, None, 60, &room);
     let robot = Robot::from_toml(&pwm_text()).unwrap();
     let score = Score::for_robot(&robot, 4).unwrap();
     let out = robot_toml::calibrated(&pwm_text(), &cal).unwrap();
-    let e = errors(
+    errors(
         &cal,
         &Robot::from_toml(&out).unwrap(),
         &robot,
         &hidden.keys,
         &score,
-    );
-    assert!(e.missed.is_empty() && e.softest_wrong.is_empty(), "{e:?}");
-    let over: Vec<_> = e.strikes.iter().filter(|s| s.2.abs() > 1.5).collect();
-    assert!(
-        over.len() <= 3,
-        "{} strikes over 1.5 ms: {over:?}",
-        over.len()
-    );
-    assert!(e.delay_max_ms <= 4.0, "{over:?}");
-    // From C4 up every strike within 1.5 ms.
-    assert!(over.iter().all(|s| s.0 < 60), "{over:?}");
-    assert!(e.press_delay_max_ms <= 1.5, "{e:?}");
+    )
 }
