@@ -29,6 +29,9 @@ const PEER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/link/peer.py");
 
 /// The most a note may arrive off its beat, ms.
 const ON_BEAT_MS: f64 = 3.0;
+/// How long after a tempo change, µs, a robot's notes may be off their beat: see the first
+/// test.
+const CHANGE_US: f64 = 1e6;
 
 fn ip(args: &[&str]) {
     let out = Command::new("ip")
@@ -403,9 +406,9 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
     }
     // The compensated robot: each note sent early by its key's own delay (the same for every
     // repeat of a note), and its copy at the far end sounded each on the beat.
-    // (The beat after the tempo change aside, as for every robot below.)
-    let (changed_us, beat_len_us) = (changed[0], 60e6 / 130.0);
-    let settled = |o: &&Onset| !(changed_us..changed_us + beat_len_us).contains(&o.host_us);
+    // (The second after the tempo change aside, as for every robot below.)
+    let changed_us = changed[0];
+    let settled = |o: &&Onset| !(changed_us..changed_us + CHANGE_US).contains(&o.host_us);
     let early = by(4);
     assert!(early.len() > 10, "{} notes: {compensated_err}", early.len());
     for note in 48..72 {
@@ -427,9 +430,21 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
     assert!(onset["max"].as_f64().unwrap() <= 1.0, "{onset}");
     let all: Vec<Onset> = all.iter().filter(|o| o.robot != 4).copied().collect();
 
-    // Every note of every robot on its beat, but in the beat after the tempo change: the
+    // Every note of every robot on its beat, but in the second after the tempo change: the
     // change reaches the robots some 20 ms after the peer made it (Link's own pace), and a note
-    // due in that time comes up to 30 % of it late (100 -> 130 BPM).
+    // due in that time comes up to 30 % of it late (100 -> 130 BPM). A robot whose copy of the
+    // change was lost (one Link datagram in twenty, at every robot host) hears of it later and
+    // catches up (at most 25 % faster): a CI run had a note 13.09 ms off after the first beat.
+    let changing: Vec<f64> = all
+        .iter()
+        .filter(|o| !settled(o))
+        .map(|o| o.off_ms().abs())
+        .collect();
+    eprintln!(
+        "in the second after the tempo change: {} notes, the worst {:.2} ms off its beat",
+        changing.len(),
+        changing.iter().copied().fold(0.0, f64::max)
+    );
     let mut offs: Vec<f64> = all
         .iter()
         .filter(settled)
@@ -462,9 +477,9 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
         );
     }
 
-    // The tempo change is followed within one beat: after it, each robot's notes come a
-    // 130 BPM beat apart (and on the beat, above).
-    let beat_after = changed[0] + 60e6 / 130.0;
+    // The tempo change is followed: a second after it, each robot's notes come a 130 BPM beat
+    // apart (and on the beat, above).
+    let beat_after = changed[0] + CHANGE_US;
     for r in 0..3 {
         let after: Vec<Onset> = by(r)
             .into_iter()
