@@ -4,11 +4,5 @@
 #[test]
 fn no_function_in_the_crate_is_over_150_lines() {
     let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let long = testkit::lines::over_limit(&src, 10);
-    assert!(
-        long.is_empty(),
-        "over {} lines:\n{}",
-        testkit::lines::LIMIT,
-        long.join("\n")
-    );
+    testkit::lines::assert_short(&src);
 }

@@ -9,6 +9,13 @@ use std::path::{Path, PathBuf};
 /// The longest a function may be, in lines (its signature and closing brace included).
 pub const LIMIT: usize = 150;
 
+/// Panics, naming each, if a function in `dir` (at least 10 lines long to be looked at) is
+/// longer than [`LIMIT`]: the check a crate's `function_length` test makes.
+pub fn assert_short(dir: &Path) {
+    let long = over_limit(dir, 10);
+    assert!(long.is_empty(), "over {LIMIT} lines:\n{}", long.join("\n"));
+}
+
 /// Every function over [`LIMIT`] lines in the `.rs` files under `dir`, as
 /// `FILE:LINE fn NAME: N lines`; panics if `dir` holds fewer than `at_least` files (so that a
 /// wrong folder cannot pass).
