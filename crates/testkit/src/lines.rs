@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 /// The longest a function may be, in lines (its signature and closing brace included).
 pub const LIMIT: usize = 150;
 
-/// Panics, naming each, if a function in `dir` (at least 10 lines long to be looked at) is
-/// longer than [`LIMIT`]: the check a crate's `function_length` test makes.
+/// Panics, naming each, if a function in the `.rs` files under `dir` (at least 10 of them, so
+/// that a wrong folder cannot pass) is longer than [`LIMIT`]: a crate's `function_length` test.
 pub fn assert_short(dir: &Path) {
     let long = over_limit(dir, 10);
     assert!(long.is_empty(), "over {LIMIT} lines:\n{}", long.join("\n"));
