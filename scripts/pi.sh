@@ -12,8 +12,7 @@
 # 3. packs it with cargo-deb (Cargo.toml's [package.metadata.deb]), installs the package into
 #    a scratch root with dpkg (its maintainer scripts run: the user orch in the i2c group), runs
 #    the installed binary, verifies the installed unit with `systemd-analyze verify`, and
-#    removes the package again.
-#
+#    removes the package again;
 # 4. builds it again with the `link` feature and plays it, under qemu in a network namespace,
 #    in phase with this machine's orch and an independent Link peer (tests/link.rs's
 #    an_arm64_robot_plays_in_phase_under_qemu; run as root, as CI is).
@@ -177,8 +176,8 @@ echo "== Link on arm64: orch built with --features link, run under qemu in a net
 # before, from the build without `link`: a binary built with it is GPL (book: orchestra.md).
 export BINDGEN_EXTRA_CLANG_ARGS_aarch64_unknown_linux_gnu="--sysroot=$sysroot"
 cargo build --locked -p orch --bin orch --features link --target "$triple" --profile pi
-# qemu-user 7.2 refuses IP_MULTICAST_IF; the shim answers it (see the file for why nothing
-# is lost by that in the test's namespaces).
+# qemu-user 7.2 refuses three multicast socket options the SDK sets; the shim answers them
+# (see the file for why nothing is lost by that in the test's namespaces).
 aarch64-linux-gnu-gcc -shared -fPIC -O2 -o "$tmp/multicast_if.so" tests/link/qemu_multicast_if.c -ldl
 printf '#!/bin/sh\nexec qemu-aarch64 -L %q -E LD_PRELOAD=%q %q "$@"\n' \
     "$sysroot" "$tmp/multicast_if.so" "$(realpath "$bin")" >"$tmp/orch-pi-link"
