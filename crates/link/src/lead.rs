@@ -73,10 +73,14 @@ impl Lead {
     }
 }
 
+/// How much further before bar one than [`LEAD_IN_BEATS`](crate::LEAD_IN_BEATS) a leader
+/// starts the session, beats: so that rounding never puts bar one a bar later.
+pub const LEAD_IN_MARGIN: f64 = 1e-3;
+
 /// When a session (showing `timeline` at host time `host`) that a performance leads begins:
 /// the first bar line at least `lead_us` from now, as host µs and beat. The session is
-/// started [`LEAD_IN_US`](crate::LEAD_IN_US) and a millisecond before it, so every peer
-/// finds that bar line for bar one.
+/// started [`LEAD_IN_BEATS`](crate::LEAD_IN_BEATS) and [`LEAD_IN_MARGIN`] before it, so
+/// every peer finds that bar line for bar one.
 pub fn bar_line_after(
     timeline: &impl Timeline,
     host: i64,
@@ -92,7 +96,7 @@ mod tests {
     use super::*;
     use crate::entry::bar_one;
     use crate::timeline::Line;
-    use crate::LEAD_IN_US;
+    use crate::LEAD_IN_BEATS;
     use orch_perform::Tempo;
 
     fn line() -> Line {
@@ -101,7 +105,7 @@ mod tests {
             at_us: 0,
             beat: 0.5,
             playing: false,
-            started_us: 0,
+            started_beat: 0.5,
         }
     }
 
@@ -111,7 +115,7 @@ mod tests {
         let (at, beat) = bar_line_after(&l, 1_000_000, 1_000_000, 4.0);
         assert_eq!(beat, 4.0);
         l.playing = true;
-        l.started_us = at - LEAD_IN_US - 1_000;
+        l.started_beat = beat - LEAD_IN_BEATS - LEAD_IN_MARGIN;
         assert_eq!(bar_one(&l, 4.0), beat);
     }
 

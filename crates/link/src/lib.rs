@@ -20,7 +20,7 @@
 //! use orch_perform::{ScoreBeats, TimeMap};
 //!
 //! // A session at 120 BPM that began to play at host time 1 s, on beat 8.
-//! let session = Line { bpm: 120.0, at_us: 1_000_000, beat: 8.0, playing: true, started_us: 1_000_000 };
+//! let session = Line { bpm: 120.0, at_us: 1_000_000, beat: 8.0, playing: true, started_beat: 8.0 };
 //! // A robot that needs 100 ms comes in at bar one: beat 12, host time 3 s.
 //! let entry = entry(&session, 4.0, 1_000_000, 100_000);
 //! assert_eq!((entry.quarter, entry.host_us), (0, 3_000_000));
@@ -42,7 +42,7 @@ pub mod session;
 pub mod steer;
 pub mod timeline;
 
-pub use entry::{bar_one, entry, Entry, LEAD_IN_US};
-pub use lead::{bar_line_after, Lead, Publish};
+pub use entry::{bar_one, entry, Entry, LEAD_IN_BEATS};
+pub use lead::{bar_line_after, Lead, Publish, LEAD_IN_MARGIN};
 pub use steer::{Steer, Step, HORIZON_US, JUMP_QUARTERS, SLACK};
 pub use timeline::{Line, Timeline};

@@ -28,7 +28,7 @@ use rusty_link::{AblLink, SessionState};
 use crate::lead::{bar_line_after, Lead, Publish};
 use crate::steer::{Steer, Step};
 use crate::timeline::Timeline;
-use crate::LEAD_IN_US;
+use crate::{LEAD_IN_BEATS, LEAD_IN_MARGIN};
 
 /// How often the session is looked at, while waiting and while following.
 pub const LOOK_EVERY: Duration = Duration::from_millis(2);
@@ -130,8 +130,10 @@ impl Session {
     pub fn start_leading(&self, bpm: f64, lead_us: i64, quantum: f64) -> (i64, f64) {
         self.set_tempo(bpm);
         let now = self.host_us();
-        let (at, beat) = bar_line_after(&self.capture(), now, lead_us, quantum);
-        self.commit(|s, _| s.set_is_playing(true, at - LEAD_IN_US - 1_000));
+        let timeline = self.capture();
+        let (at, beat) = bar_line_after(&timeline, now, lead_us, quantum);
+        let start = timeline.time_at(beat - LEAD_IN_BEATS - LEAD_IN_MARGIN, quantum);
+        self.commit(|s, _| s.set_is_playing(true, start));
         (at, beat)
     }
 

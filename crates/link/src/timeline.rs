@@ -30,8 +30,9 @@ pub struct Line {
     pub beat: f64,
     /// Whether the session plays.
     pub playing: bool,
-    /// When it began to play, host µs.
-    pub started_us: i64,
+    /// The beat at which it began to play (or stopped). Link keeps that beat, not the
+    /// moment: after a tempo change the start is where that beat falls at the new tempo.
+    pub started_beat: f64,
 }
 
 impl Line {
@@ -61,6 +62,6 @@ impl Timeline for Line {
     }
 
     fn started_at(&self) -> i64 {
-        self.started_us
+        self.time_at(self.started_beat, 4.0)
     }
 }

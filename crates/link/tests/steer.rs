@@ -63,7 +63,7 @@ fn session() -> Line {
         at_us: 0,
         beat: 0.0,
         playing: true,
-        started_us: 0,
+        started_beat: 0.0,
     }
 }
 
