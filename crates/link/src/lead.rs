@@ -62,7 +62,10 @@ impl Lead {
             return Publish::Nothing;
         }
         let (bpm, beat) = self.at(map, wall);
-        let drift_us = (timeline.beat_at(host, self.quantum) - beat) * 60e6 / bpm;
+        // Within a bar: whole bars are this host's count of beats moving, which no other peer
+        // sees (see [`Steer`](crate::Steer)'s notes).
+        let drift = timeline.beat_at(host, self.quantum) - beat;
+        let drift_us = (drift - (drift / self.quantum).round() * self.quantum) * 60e6 / bpm;
         if drift_us.abs() > PHASE_SLACK_US {
             Publish::Beat(bpm, beat)
         } else if (timeline.tempo() / bpm - 1.0).abs() > TEMPO_SLACK {
@@ -112,8 +115,9 @@ mod tests {
     #[test]
     fn the_session_started_so_finds_the_bar_line_for_bar_one() {
         let mut l = line();
+        // From 1 s, at least 1 s on: beat 4, 3.5 beats (2.1 s) from beat 0.5 at 0.
         let (at, beat) = bar_line_after(&l, 1_000_000, 1_000_000, 4.0);
-        assert_eq!(beat, 4.0);
+        assert_eq!((at, beat), (2_100_000, 4.0));
         l.playing = true;
         l.started_beat = beat - LEAD_IN_BEATS - LEAD_IN_MARGIN;
         assert_eq!(bar_one(&l, 4.0), beat);
@@ -130,6 +134,9 @@ mod tests {
         l.bpm = 200.0;
         l.at_us = 1_000_000;
         l.beat = 8.0;
+        assert_eq!(lead.step(&l, 1_300_000, 1_300_000, &map), Publish::Nothing);
+        // This host's count a bar behind: the same phase, nothing to publish.
+        l.beat = 4.0;
         assert_eq!(lead.step(&l, 1_300_000, 1_300_000, &map), Publish::Nothing);
         l.bpm = 100.0;
         l.beat = 8.5;

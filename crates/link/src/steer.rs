@@ -15,6 +15,14 @@
 //! session's beat jumped: a peer forced it, or two sessions met), a factor would rush or
 //! drag a whole passage: it jumps to the place the session will be at once its lookahead
 //! has passed, instead.
+//!
+//! **The error is taken within a bar.** A Link session shares the *phase* of its beat within
+//! the quantum, not the count of beats: each host numbers them its own way, and its count may
+//! move by whole bars. It does so at a tempo change, when the host's own count stands half a
+//! bar from the session's (Link keeps each host's count continuous, but the nearest bar-aligned
+//! count to it then flips; seen in a test run: a robot jumped a bar back at 100 → 130 BPM). So
+//! an error of whole bars is the count moving, not the music: the performance goes on where it
+//! is, and whole bars are left out of the error.
 
 use orch_perform::{ScoreBeats, Tempo, TimeMap};
 
@@ -99,11 +107,12 @@ impl Steer {
         }
         let now = map.score(wall_now);
         let (quarter, len) = self.beats.at(now);
-        let error = quarter - self.quarter_at(timeline, host_now);
+        let raw = quarter - self.quarter_at(timeline, host_now);
+        // Whole bars are this host's count of beats moving (see the module notes).
+        let bars = (raw / self.quantum).round() * self.quantum;
+        let error = raw - bars;
         if error.abs() > JUMP_QUARTERS {
-            let q = self
-                .quarter_at(timeline, host_now + self.lookahead_us)
-                .max(0.0);
+            let q = (self.quarter_at(timeline, host_now + self.lookahead_us) + bars).max(0.0);
             return Step::Jump(self.beats.time_of(q));
         }
         // The even factor here (a quarter of this length in one beat), and the error (score

@@ -122,6 +122,27 @@ fn a_beat_that_jumps_is_jumped_to() {
     );
 }
 
+/// Link shares the phase of the beat within a bar, not the count of beats: a host's count may
+/// move by a whole bar (seen at a tempo change), and the score goes on where it is.
+#[test]
+fn a_count_of_beats_moved_by_a_bar_moves_nothing() {
+    let moved_at = 8_000_000;
+    let errors = run(&mut session(), 16_000_000, |s, t| {
+        if t == moved_at {
+            s.beat -= 4.0;
+        }
+    });
+    assert!(worst(&errors, 0, moved_at) < 1_000.0);
+    // From the move on, the performance stands a bar (4 beats of 600 ms) ahead of the moved
+    // count, on the beat.
+    let off_a_bar = errors
+        .iter()
+        .filter(|(t, _)| *t >= moved_at)
+        .map(|(_, e)| (e - 2_400_000.0).abs())
+        .fold(0.0, f64::max);
+    assert!(off_a_bar < 1_000.0, "{off_a_bar:.1} µs");
+}
+
 #[test]
 fn a_stopped_session_stops_the_performance() {
     let mut s = session();
