@@ -3,8 +3,9 @@
 
 /// A Link session's timeline at one capture. Times are µs on the session's host clock (Link's
 /// own: `CLOCK_MONOTONIC_RAW` on Linux); beats are the session's, aligned to a `quantum` (the
-/// beats of a bar): two hosts may number beats differently, by whole quanta, but every bar
-/// line falls at one moment on both.
+/// beats of a bar): two hosts may number beats differently, by whole quanta, and one host's
+/// numbering may move by whole quanta when the session's timeline changes (see
+/// [`Steer`](crate::Steer)), but every bar line falls at one moment on every host.
 pub trait Timeline {
     /// Beats per minute.
     fn tempo(&self) -> f64;
