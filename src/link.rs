@@ -41,7 +41,9 @@ mod imp {
     use std::sync::Arc;
     use std::time::Instant;
 
-    use orch_link::session::{follow, Following, Leading, Session, DISCOVERY};
+    use orch_link::session::{
+        follow, Following, Leading, Session, ALONE_AFTER, DISCOVERY, DISCOVERY_GROUP,
+    };
     use orch_link::{entry, Lead, Steer, Timeline};
     use orch_perform::{Control, Planner, ScoreBeats, Setup, Tempo, WallTime};
     use orch_seq::Song;
@@ -69,7 +71,15 @@ mod imp {
         let quantum = quantum(song);
         let session = Arc::new(Session::join(120.0));
         eprintln!("orch: --link: joined the Link session; waiting for it to play");
-        if !session.wait_playing(start, give_up) {
+        let alone = || {
+            eprintln!(
+                "orch: --link: no other Link peer after {} s; still waiting (peers find each other \
+                 by multicast to {DISCOVERY_GROUP}: the network and every host's firewall must \
+                 pass it)",
+                ALONE_AFTER.as_secs()
+            );
+        };
+        if !session.wait_playing(start, give_up, alone) {
             return Ok(None);
         }
         let lookahead =

@@ -609,6 +609,31 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
     let _ = std::fs::remove_file(file);
 }
 
+/// A robot that finds no other peer says so once, after `ALONE_AFTER`, with where Link's
+/// discovery must pass, and goes on waiting; a signal ends the wait, nothing sent.
+#[test]
+fn a_robot_alone_says_it_found_no_peer_and_waits() {
+    let net = Net::new(1);
+    let file = std::env::temp_dir().join(format!("orch-link-{}-alone.mid", std::process::id()));
+    std::fs::write(&file, testkit::smf::quarters_smf(4, 120.0)).unwrap();
+    let alone = robot(&net, 0, file.to_str().unwrap(), 9001);
+    std::thread::sleep(orch_link::session::ALONE_AFTER + Duration::from_millis(1_500));
+    let stopped = Command::new("kill")
+        .args(["-TERM", &alone.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(stopped.success());
+    let out = exited(alone, Duration::from_secs(5));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let said: Vec<&str> = err.lines().filter(|l| l.contains("no other Link peer")).collect();
+    assert_eq!(said.len(), 1, "{err}");
+    assert!(said[0].contains("224.76.78.75") && said[0].contains("20808"), "{err}");
+    assert!(!err.contains("coming in"), "{err}");
+    assert!(out.stdout.is_empty(), "{}", String::from_utf8_lossy(&out.stdout));
+    let _ = std::fs::remove_file(file);
+}
+
 /// `--start` starts a session nobody has started, once it has listened for one for a second;
 /// the robot comes in on bar one, and the other peers see the session play.
 #[test]

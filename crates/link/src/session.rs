@@ -46,6 +46,15 @@ pub const STOP_LINGER: Duration = Duration::from_millis(500);
 /// answers within a few hundred ms on a LAN.
 pub const DISCOVERY: Duration = Duration::from_millis(1_000);
 
+/// How long a waiting peer may find no other peer in its session before
+/// [`Session::wait_playing`] says so: Link's discovery answers within a second on a LAN, and
+/// within two or three through lost packets.
+pub const ALONE_AFTER: Duration = Duration::from_secs(5);
+
+/// Where Link's discovery goes: every peer sends its state to these multicast groups, on
+/// this UDP port (Ableton's SDK, `discovery/IpInterface.hpp`).
+pub const DISCOVERY_GROUP: &str = "224.76.78.75 (IPv6: ff12::8080), UDP port 20808";
+
 /// One capture of the session's state.
 pub struct Captured(SessionState);
 
@@ -165,9 +174,11 @@ impl Session {
     }
 
     /// Waits until the session plays; with `start`, starts it if it does not play once
-    /// [`DISCOVERY`] has passed. Whether it plays (false: `give_up` was set first).
-    pub fn wait_playing(&self, start: bool, give_up: &AtomicBool) -> bool {
+    /// [`DISCOVERY`] has passed. Calls `alone` once if no other peer has joined this one's
+    /// session after [`ALONE_AFTER`]. Whether it plays (false: `give_up` was set first).
+    pub fn wait_playing(&self, start: bool, give_up: &AtomicBool, mut alone: impl FnMut()) -> bool {
         let began = Instant::now();
+        let mut told = false;
         loop {
             if self.capture().is_playing() {
                 return true;
@@ -177,6 +188,10 @@ impl Session {
             }
             if start && began.elapsed() >= DISCOVERY {
                 self.start();
+            }
+            if !told && began.elapsed() >= ALONE_AFTER && self.peers() == 0 {
+                alone();
+                told = true;
             }
             thread::sleep(LOOK_EVERY);
         }
