@@ -626,11 +626,21 @@ fn a_robot_alone_says_it_found_no_peer_and_waits() {
     let out = exited(alone, Duration::from_secs(5));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
-    let said: Vec<&str> = err.lines().filter(|l| l.contains("no other Link peer")).collect();
+    let said: Vec<&str> = err
+        .lines()
+        .filter(|l| l.contains("no other Link peer"))
+        .collect();
     assert_eq!(said.len(), 1, "{err}");
-    assert!(said[0].contains("224.76.78.75") && said[0].contains("20808"), "{err}");
+    assert!(
+        said[0].contains("224.76.78.75") && said[0].contains("20808"),
+        "{err}"
+    );
     assert!(!err.contains("coming in"), "{err}");
-    assert!(out.stdout.is_empty(), "{}", String::from_utf8_lossy(&out.stdout));
+    assert!(
+        out.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
     let _ = std::fs::remove_file(file);
 }
 
