@@ -47,8 +47,8 @@ pub const STOP_LINGER: Duration = Duration::from_millis(500);
 pub const DISCOVERY: Duration = Duration::from_millis(1_000);
 
 /// How long a waiting peer may find no other peer in its session before
-/// [`Session::wait_playing`] says so: Link's discovery answers within a second on a LAN, and
-/// within two or three through lost packets.
+/// [`Session::wait_playing`] says so: in `tests/link.rs`, through lost packets, robots found
+/// the session within about a second.
 pub const ALONE_AFTER: Duration = Duration::from_secs(5);
 
 /// Where Link's discovery goes: every peer sends its state to these multicast groups, on
