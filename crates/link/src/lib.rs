@@ -35,6 +35,7 @@
 
 #![forbid(unsafe_code)]
 
+pub mod announce;
 pub mod entry;
 pub mod lead;
 #[cfg(feature = "abl")]
@@ -42,6 +43,7 @@ pub mod session;
 pub mod steer;
 pub mod timeline;
 
+pub use announce::{Anchor, REANCHOR_US};
 pub use entry::{bar_one, entry, Entry, LEAD_IN_BEATS};
 pub use lead::{bar_line_after, Lead, Publish, LEAD_IN_MARGIN};
 pub use steer::{Steer, Step, HORIZON_US, JUMP_QUARTERS, SLACK};

@@ -12,10 +12,10 @@
 //! round that a joining peer could take (starting the session itself would start a stopped
 //! one). So every orch peer that plays **announces** the state again when it sees the number
 //! of peers grow: it commits "playing since the same moment" (one µs apart, so that the SDK
-//! sends it), which changes nothing for those that knew, and tells the newcomer; and again
-//! every second while it plays, as a newcomer on a lossy network may take seconds to join. A session
-//! played only by other apps (a DAW alone) is not announced again: there a newcomer waits
-//! for the next start.
+//! sends it, and never farther: see [`announce`](crate::announce)), which changes nothing for
+//! those that knew, and tells the newcomer; and again every second while it plays, as a
+//! newcomer on a lossy network may take seconds to join. A session played only by other apps
+//! (a DAW alone) is not announced again: there a newcomer waits for the next start.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -25,6 +25,7 @@ use std::time::{Duration, Instant};
 use orch_perform::Control;
 use rusty_link::{AblLink, SessionState};
 
+use crate::announce::Anchor;
 use crate::lead::{bar_line_after, Lead, Publish};
 use crate::steer::{Steer, Step};
 use crate::timeline::Timeline;
@@ -83,8 +84,6 @@ impl Timeline for Captured {
 /// This host's peer in a Link session.
 pub struct Session {
     link: AblLink,
-    /// The last announcement's nudge (±1 µs), so that each one is a change the SDK sends.
-    nudge: std::sync::atomic::AtomicI64,
 }
 
 impl Session {
@@ -94,10 +93,7 @@ impl Session {
         let link = AblLink::new(bpm);
         link.enable_start_stop_sync(true);
         link.enable(true);
-        Self {
-            link,
-            nudge: 1.into(),
-        }
+        Self { link }
     }
 
     /// Now, µs on the session's host clock.
@@ -155,13 +151,12 @@ impl Session {
         });
     }
 
-    /// Says again that the session plays, since the moment it began (see the [module
-    /// notes](self)); nothing if it does not play.
-    pub fn announce(&self) {
-        let nudge = -self.nudge.fetch_neg();
+    /// Says again that the session plays, since the moment it began, as `anchor` keeps it
+    /// (see the [module notes](self)); nothing if it does not play.
+    pub fn announce(&self, anchor: &mut Anchor) {
         self.commit(|s, _| {
             if s.is_playing() {
-                s.set_is_playing(true, s.time_for_is_playing() + nudge);
+                s.set_is_playing(true, anchor.announce(s.time_for_is_playing()));
             }
         });
     }
@@ -206,27 +201,13 @@ impl Session {
     }
 }
 
-trait FetchNeg {
-    fn fetch_neg(&self) -> i64;
-}
-
-impl FetchNeg for std::sync::atomic::AtomicI64 {
-    /// Negates the value, returning the old one.
-    fn fetch_neg(&self) -> i64 {
-        let mut old = self.load(Ordering::SeqCst);
-        while let Err(v) = self.compare_exchange(old, -old, Ordering::SeqCst, Ordering::SeqCst) {
-            old = v;
-        }
-        old
-    }
-}
-
 /// Tells newcomers that the session plays: at once when the number of peers grows, and
 /// again every [`ANNOUNCE_EVERY`] while it plays, so a newcomer that took its time to join (a
 /// lossy network) or missed one hears it within that.
 struct Announcer {
     peers: u64,
     announced_at: Instant,
+    anchor: Anchor,
 }
 
 impl Announcer {
@@ -234,6 +215,7 @@ impl Announcer {
         Self {
             peers: session.peers(),
             announced_at: Instant::now(),
+            anchor: Anchor::at(session.capture().started_at()),
         }
     }
 
@@ -245,7 +227,7 @@ impl Announcer {
         if !grew && self.announced_at.elapsed() < ANNOUNCE_EVERY {
             return 0;
         }
-        session.announce();
+        session.announce(&mut self.anchor);
         self.announced_at = Instant::now();
         1
     }
