@@ -5,11 +5,8 @@ use orch_baton::source::Y4mWriter;
 use orch_baton::synth::{Script, Video};
 use serde_json::Value;
 
-fn scratch(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("orch-baton-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn scratch(name: &str) -> testkit::Scratch {
+    testkit::Scratch::new(&format!("baton-cli-{name}"))
 }
 
 #[test]
@@ -74,7 +71,6 @@ fn json_lines_one_per_beat_at_the_true_ictus() {
     let text = String::from_utf8(out.stdout).unwrap();
     assert_eq!(text.lines().filter(|l| l.starts_with("beat ")).count(), 5);
     assert!(text.lines().last().unwrap().contains("5 beats"), "{text}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -86,13 +82,13 @@ fn bad_input_exits_2_with_a_clear_message() {
     let cases: Vec<(Vec<std::ffi::OsString>, &str)> = vec![
         (vec![missing.clone().into()], "no such file"),
         (vec![junk.clone().into()], "YUV4MPEG2"),
-        (vec![dir.clone().into()], "--fps"),
+        (vec![dir.as_os_str().into()], "--fps"),
         (
-            vec![dir.clone().into(), "--fps".into(), "0".into()],
+            vec![dir.as_os_str().into(), "--fps".into(), "0".into()],
             "--fps",
         ),
         (
-            vec![dir.clone().into(), "--fps".into(), "30".into()],
+            vec![dir.as_os_str().into(), "--fps".into(), "30".into()],
             "no .png",
         ),
     ];
@@ -108,5 +104,4 @@ fn bad_input_exits_2_with_a_clear_message() {
         assert!(err.contains(says), "{args:?}: {err}");
         assert!(out.stdout.is_empty());
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }

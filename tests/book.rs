@@ -328,7 +328,7 @@ fn the_generated_reference_is_what_orch_prints() {
     }
     // The picture of the README and of the roll's chapter: Ode to Joy's piano roll at four times
     // its tempo, where a few notes come late and one is dropped.
-    let svg = std::env::temp_dir().join(format!("orch-book-roll-{}.svg", std::process::id()));
+    let svg = testkit::in_test("roll.svg");
     let out = orch()
         .args([
             "analyze",
@@ -457,7 +457,7 @@ fn run_console(block: &Block, dir: &Path, at: &str, problems: &mut Vec<String>) 
 
 #[test]
 fn every_shell_example_runs() {
-    let scratch = std::env::temp_dir().join(format!("orch-book-{}", std::process::id()));
+    let scratch = testkit::Scratch::new("book");
     let mut problems = Vec::new();
     let mut ran = 0;
     for file in markdown_files(&book_src()) {
@@ -511,7 +511,6 @@ fn every_shell_example_runs() {
             ran += 1;
         }
     }
-    let _ = fs::remove_dir_all(&scratch);
     assert!(ran > 0, "no example ran");
     assert!(
         problems.is_empty(),

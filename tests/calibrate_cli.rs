@@ -4,14 +4,13 @@
 use assert_cmd::Command;
 use orch_calibrate::synthetic::{clear_of_floor, hidden_robot, record, Room};
 use orch_calibrate::Score;
-use std::path::PathBuf;
+use testkit::Scratch;
 
 const SMALL: &str =
     "[keys]\nlow = 60\nhigh = 71\n[[boards]]\nkind = \"pca9685\"\naddress = 0x40\nkeys = 12\n";
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("orch-calibrate-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
+fn dir(name: &str) -> Scratch {
+    let d = Scratch::new(&format!("calibrate-{name}"));
     std::fs::write(d.join("robot.toml"), SMALL).unwrap();
     d
 }

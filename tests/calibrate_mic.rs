@@ -4,7 +4,6 @@
 //! `$XDG_CONFIG_HOME/alsa/asoundrc`, set for the `orch` run alone). Built without the `mic`
 //! feature, `--mic` is refused, naming it.
 
-use std::path::PathBuf;
 use std::process::Command;
 
 fn orch() -> Command {
@@ -15,8 +14,8 @@ fn orch() -> Command {
 const FIVE: &str =
     "[keys]\nlow = 60\nhigh = 64\n[[boards]]\nkind = \"pca9685\"\naddress = 0x40\nkeys = 5\n";
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("orch-calibrate-mic-{}-{name}", std::process::id()));
+fn dir(name: &str) -> testkit::Scratch {
+    let d = testkit::Scratch::new(&format!("calibrate-mic-{name}"));
     std::fs::create_dir_all(d.join("alsa")).unwrap();
     std::fs::write(d.join("robot.toml"), FIVE).unwrap();
     d

@@ -659,11 +659,9 @@ fn analyze_svg_draws_every_note_with_the_reports_outcomes() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("--svg"));
 }
 
-/// A folder of this test process's own for files a test writes, made if missing.
-fn scratch(tag: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("orch-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A folder of the test's own for files it writes, removed when the test ends.
+fn scratch(tag: &str) -> testkit::Scratch {
+    testkit::Scratch::new(tag)
 }
 
 fn corpus(name: &str) -> std::path::PathBuf {
@@ -777,7 +775,7 @@ fn play_fast_json_report_adds_up() {
 
 #[test]
 fn play_writes_lists_every_board_write_of_the_performance() {
-    let path = std::env::temp_dir().join(format!("orch-writes-{}.jsonl", std::process::id()));
+    let path = testkit::in_test("writes.jsonl");
     let play = |writes: Option<&std::path::Path>| {
         let mut cmd = orch();
         cmd.args(["play", "--fast", "--json"])
@@ -882,7 +880,7 @@ fn analyze_says_what_will_go_wrong() {
         text.contains("notes are outside the keys and will be folded"),
         "{text}"
     );
-    let robot = std::env::temp_dir().join(format!("orch-drop-{}.toml", std::process::id()));
+    let robot = testkit::in_test("drop.toml");
     std::fs::write(&robot, "[keys]\nout_of_range = \"drop\"\n").unwrap();
     let out = orch()
         .args(["analyze", "--json", "--robot"])

@@ -194,10 +194,11 @@ fn the_baton_harness_videos_are_followed_within_25_ms_of_their_true_beats() {
     }
 }
 
-fn scratch(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("orch-conduct-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+/// A scratch folder (removed when it drops), and a file `name` in it.
+fn scratch(name: &str) -> (testkit::Scratch, std::path::PathBuf) {
+    let dir = testkit::Scratch::new("conduct");
+    let file = dir.join(name);
+    (dir, file)
 }
 
 /// The report says every note was struck.
@@ -209,7 +210,7 @@ fn all_struck(stdout: &[u8], notes: u64) {
 #[test]
 fn midi_clock_on_stdin_sets_the_tempo() {
     // Eight quarters written at 60 BPM (8 s); the clock runs at 120: about 4 s.
-    let file = scratch("clock.mid");
+    let (_dir, file) = scratch("clock.mid");
     std::fs::write(&file, support::quarters_smf(8, 60.0)).unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_orch"))
         .args([
@@ -250,7 +251,7 @@ fn midi_clock_on_stdin_sets_the_tempo() {
 
 #[test]
 fn osc_tempo_over_udp_sets_the_tempo() {
-    let file = scratch("osc.mid");
+    let (_dir, file) = scratch("osc.mid");
     std::fs::write(&file, support::quarters_smf(8, 60.0)).unwrap();
     let port = std::net::UdpSocket::bind("127.0.0.1:0")
         .unwrap()
@@ -282,7 +283,7 @@ fn osc_tempo_over_udp_sets_the_tempo() {
 
 #[test]
 fn bad_sources_exit_2() {
-    let file = scratch("bad.mid");
+    let (_dir, file) = scratch("bad.mid");
     std::fs::write(&file, support::quarters_smf(2, 60.0)).unwrap();
     for source in [
         "nothing",
@@ -320,7 +321,7 @@ fn osc_beats_over_loopback_changing_from_100_to_130_bpm_are_followed_within_25_m
     // tempo (an invented beat among them), and from the change's third beat on (beat 19; the
     // change is recognised at its second, and its first is caught up from the moment it can
     // no longer be an invented beat: `orch conduct` wakes the follower then, between beats).
-    let file = scratch("osc-beats.mid");
+    let (_dir, file) = scratch("osc-beats.mid");
     std::fs::write(&file, support::quarters_smf(40, 100.0)).unwrap();
     let sink = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
     let out = sink.local_addr().unwrap();

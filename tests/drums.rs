@@ -6,6 +6,7 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use testkit::Scratch;
 
 use assert_cmd::Command;
 use serde_json::Value;
@@ -18,10 +19,8 @@ fn shared_midi() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/midi")
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("orch-drums-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn scratch(name: &str) -> Scratch {
+    Scratch::new(&format!("drums-{name}"))
 }
 
 fn json_lines(path: &Path) -> Vec<Value> {

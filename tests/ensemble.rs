@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use testkit::Scratch;
 
 use serde_json::Value;
 
@@ -48,10 +49,8 @@ pub fn ensemble(piano: &str, recorder: u8) -> String {
     )
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("orch-ensemble-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn scratch(name: &str) -> Scratch {
+    Scratch::new(&format!("ensemble-{name}"))
 }
 
 /// The corpus file: channel 9 a bass line and 16 chords (the piano), 10 drums, 15 a melody

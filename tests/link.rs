@@ -363,7 +363,7 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
 #[test]
 fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
     let net = Net::new(6);
-    let file = std::env::temp_dir().join(format!("orch-link-{}-4.mid", std::process::id()));
+    let file = testkit::in_test("4.mid");
     // 400 quarter notes at 120 BPM, notes 48..71 in turn: a note tells its quarter.
     std::fs::write(&file, testkit::smf::quarters_smf(400, 120.0)).unwrap();
     let file = file.to_str().unwrap();
@@ -614,7 +614,7 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
 #[test]
 fn a_robot_alone_says_it_found_no_peer_and_waits() {
     let net = Net::new(1);
-    let file = std::env::temp_dir().join(format!("orch-link-{}-alone.mid", std::process::id()));
+    let file = testkit::in_test("alone.mid");
     std::fs::write(&file, testkit::smf::quarters_smf(4, 120.0)).unwrap();
     let alone = robot(&net, 0, file.to_str().unwrap(), 9001);
     std::thread::sleep(orch_link::session::ALONE_AFTER + Duration::from_millis(1_500));
@@ -649,7 +649,7 @@ fn a_robot_alone_says_it_found_no_peer_and_waits() {
 #[test]
 fn a_robot_with_start_starts_the_session_and_comes_in_on_bar_one() {
     let net = Net::new(2);
-    let file = std::env::temp_dir().join(format!("orch-link-{}-1.mid", std::process::id()));
+    let file = testkit::in_test("1.mid");
     std::fs::write(&file, testkit::smf::quarters_smf(12, 120.0)).unwrap();
     let mut peer = Peer::start(&net, 0, 1);
     std::thread::sleep(Duration::from_millis(1_500));
@@ -687,7 +687,7 @@ fn a_robot_with_start_starts_the_session_and_comes_in_on_bar_one() {
 fn an_arm64_robot_plays_in_phase_under_qemu() {
     let arm64 = std::env::var("ORCH_ARM64").expect("ORCH_ARM64: a script running the arm64 orch");
     let net = Net::new(3);
-    let file = std::env::temp_dir().join(format!("orch-link-{}-arm64.mid", std::process::id()));
+    let file = testkit::in_test("arm64.mid");
     std::fs::write(&file, testkit::smf::quarters_smf(24, 120.0)).unwrap();
     let file = file.to_str().unwrap();
     let mut peer = Peer::start(&net, 0, 2);
@@ -752,9 +752,8 @@ fn an_arm64_robot_plays_in_phase_under_qemu() {
 #[test]
 fn a_conductor_leads_robots_on_other_hosts() {
     let net = Net::new(4);
-    let dir = std::env::temp_dir();
-    let short = dir.join(format!("orch-link-{}-c24.mid", std::process::id()));
-    let long = dir.join(format!("orch-link-{}-c400.mid", std::process::id()));
+    let short = testkit::in_test("c24.mid");
+    let long = testkit::in_test("c400.mid");
     std::fs::write(&short, testkit::smf::quarters_smf(24, 120.0)).unwrap();
     std::fs::write(&long, testkit::smf::quarters_smf(400, 120.0)).unwrap();
     let mut peer = Peer::start(&net, 0, 3);

@@ -60,9 +60,7 @@ fn long_chord() -> Vec<u8> {
 }
 
 fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("orch-out-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    testkit::in_test(name)
 }
 
 /// What `orch play` plans for `file` on `link`: every byte, in order.

@@ -19,9 +19,7 @@ fn orch() -> Command {
 }
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("orch-render-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    testkit::in_test(name)
 }
 
 /// A one-track file, 480 ticks a quarter at 120 bpm (0.96 tick a ms): `(ms, note, velocity,

@@ -97,8 +97,7 @@ fn orch_run(robot: Option<&str>) -> (Child, Lines, Arc<Mutex<String>>, u16) {
 fn peer(port: u16, mut script: Value) -> Vec<Value> {
     pymidi();
     script["port"] = json!(port);
-    let path =
-        std::env::temp_dir().join(format!("orch-rtp-peer-{}-{port}.json", std::process::id()));
+    let path = testkit::in_test(&format!("peer-{port}.json"));
     std::fs::write(&path, script.to_string()).unwrap();
     let out = Command::new("python3")
         .arg(PEER)
@@ -196,7 +195,7 @@ fn robot(sustain: bool) -> std::path::PathBuf {
     }
     static N: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
     let n = N.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-    let p = std::env::temp_dir().join(format!("orch-rtp-{}-{n}.toml", std::process::id()));
+    let p = testkit::in_test(&format!("robot-{n}.toml"));
     std::fs::write(&p, toml).unwrap();
     p
 }

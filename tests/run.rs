@@ -261,8 +261,7 @@ mod tempfile_path {
         pub fn write(name: &str, text: &str) -> TempPath {
             static N: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
             let n = N.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-            let p =
-                std::env::temp_dir().join(format!("orch-run-{}-{n}-{name}", std::process::id()));
+            let p = testkit::in_test(&format!("{n}-{name}"));
             std::fs::write(&p, text).unwrap();
             TempPath(p)
         }
@@ -346,7 +345,7 @@ fn serial_pty_at_wire_pace_gives_what_interpret_gives() {
 /// `/dev/serial/by-id/…` is) orch reads it again, from a clean start.
 #[test]
 fn a_serial_device_that_goes_away_releases_every_key_and_is_read_again_when_it_returns() {
-    let link = std::env::temp_dir().join(format!("orch-run-serial-link-{}", std::process::id()));
+    let link = testkit::in_test("serial-link");
     let _ = std::fs::remove_file(&link);
     let (mut first, path) = support::pty_master(false);
     std::os::unix::fs::symlink(&path, &link).unwrap();
@@ -517,9 +516,7 @@ fn stdin_end_releases_and_exits_0() {
 /// itself 40 ms later (a timer, no byte), and the end of the input lets every channel go.
 #[test]
 fn on_pca9685_boards_a_note_strikes_holds_on_its_own_and_releases_at_the_end() {
-    let dir = std::env::temp_dir().join(format!("orch-run-pwm-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let robot = dir.join("robot.toml");
+    let robot = testkit::in_test("robot.toml");
     let config = Command::new(ORCH)
         .args(["config", "--boards", "pca9685"])
         .output()

@@ -23,6 +23,7 @@ use std::net::UdpSocket;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
+use testkit::Scratch;
 
 use browser::{runtime, wait_for, Driver, PATIENCE};
 use fantoccini::{Client, Locator};
@@ -88,12 +89,12 @@ fn corpus(name: &str) -> PathBuf {
         .unwrap_or_else(|e| panic!("{name} of the shared corpus (../shared/midi): {e}"))
 }
 
-fn scratch(name: &str, bytes: &[u8]) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("orch-serve-browser-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+/// A scratch folder (removed when it drops) holding `bytes` as `name`, and that file.
+fn scratch(name: &str, bytes: &[u8]) -> (Scratch, PathBuf) {
+    let dir = Scratch::new("serve-browser");
     let path = dir.join(name);
     std::fs::write(&path, bytes).unwrap();
-    path
+    (dir, path)
 }
 
 /// `orch analyze --json FILE`.
@@ -307,7 +308,7 @@ fn a_performance_is_drawn_live_in_the_accounts_order_on_two_browsers_and_its_rep
     let driver = Driver::start();
     // 16 quarter notes at 120 BPM (48, 49, … 63), each half a beat long (250 ms down, 250 ms
     // up: many states each, even on a loaded machine): 8 s.
-    let file = scratch("quarters.mid", &support::quarters_smf(16, 120.0));
+    let (_dir, file) = scratch("quarters.mid", &support::quarters_smf(16, 120.0));
     runtime().block_on(async {
         let a = driver.browser(390, 844).await;
         let b = driver.browser(1024, 768).await;
@@ -416,7 +417,7 @@ fn stop_releases_every_key_at_once_on_the_page_and_on_a_udp_output() {
     let out = format!("udp:{}", udp.local_addr().unwrap());
     let s = Served::start(&["--listen", "127.0.0.1:0", "--out", "sim", "--out", &out]);
     let driver = Driver::start();
-    let file = scratch("chord.mid", &long_chord());
+    let (_dir, file) = scratch("chord.mid", &long_chord());
     runtime().block_on(async {
         let c = driver.browser(390, 844).await;
         open(&c, &s).await;
@@ -504,7 +505,7 @@ fn the_controls_play_from_a_bar_on_the_roll_pause_set_the_tempo_and_jump() {
     let s = Served::start(&["--listen", "127.0.0.1:0"]);
     let driver = Driver::start();
     // 64 quarters at 120 BPM: 16 bars of 4/4, 32 s.
-    let file = scratch("long.mid", &support::quarters_smf(64, 120.0));
+    let (_dir, file) = scratch("long.mid", &support::quarters_smf(64, 120.0));
     runtime().block_on(async {
         let c = driver.browser(390, 844).await;
         open(&c, &s).await;

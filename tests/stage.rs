@@ -8,6 +8,7 @@
 //! ask for the reports and the account.
 
 use std::path::{Path, PathBuf};
+use testkit::Scratch;
 
 use assert_cmd::Command;
 use orch_io::OutSpec;
@@ -19,11 +20,9 @@ fn corpus(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// A folder of this test process's own for files a test writes, made if missing.
-fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("orch-stage-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A folder of the test's own for files it writes.
+fn scratch(tag: &str) -> Scratch {
+    Scratch::new(&format!("stage-{tag}"))
 }
 
 /// `orch ARGS`: its standard output, and the file `--notes` wrote (if `notes` is given).
@@ -109,7 +108,7 @@ impl Play<'_> {
 
         let args = self.args();
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        let notes = scratch(tag).join("notes.jsonl");
+        let notes = testkit::in_test(&format!("{tag}-notes.jsonl"));
         let (json, notes_file) = orch(&[&args[..], &["--json"]].concat(), Some(&notes));
         assert_eq!(
             json,
@@ -183,7 +182,7 @@ fn an_analysis_through_the_library_gives_orch_analyzes() {
     account::write_account(&mut account, &song, &played, setup.tempo, None).unwrap();
 
     let path = file.display().to_string();
-    let notes = scratch("analyze").join("notes.jsonl");
+    let notes = testkit::in_test("notes.jsonl");
     let (shown, notes_file) = orch(&["analyze", &path, "--tempo", "1.1"], Some(&notes));
     assert_eq!(
         shown,

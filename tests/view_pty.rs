@@ -83,9 +83,7 @@ impl Drop for Tmux {
 }
 
 fn scratch(name: &str, bytes: &[u8]) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("orch-view-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join(name);
+    let file = testkit::in_test(name);
     std::fs::write(&file, bytes).unwrap();
     file
 }
@@ -219,7 +217,7 @@ fn tap_tempo_in_a_pseudo_terminal_sets_the_tempo_the_taps_give() {
 #[test]
 fn a_terminal_that_hangs_up_stops_the_performance_and_releases_every_key() {
     let file = scratch("long.mid", &support::quarters_smf(120, 60.0));
-    let pidfile = std::env::temp_dir().join(format!("orch-view-pid-{}", std::process::id()));
+    let pidfile = testkit::in_test("pid");
     let _ = std::fs::remove_file(&pidfile);
     let socket = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
     socket

@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use testkit::Scratch;
 
 use serde_json::Value;
 
@@ -12,10 +13,8 @@ fn orch() -> Command {
     Command::new(env!("CARGO_BIN_EXE_orch"))
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("orch-wind-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn scratch(name: &str) -> Scratch {
+    Scratch::new(&format!("wind-{name}"))
 }
 
 /// A one-track file at 120 bpm, 480 ticks a quarter (0.96 tick a ms): `(ms, note, length ms)`

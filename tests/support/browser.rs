@@ -21,6 +21,9 @@ pub const PATIENCE: Duration = Duration::from_secs(90);
 pub struct Driver {
     child: Child,
     url: String,
+    /// chromedriver's and its browsers' temporary folder (`TMPDIR`), removed after them:
+    /// Chromium ended by a signal leaves its own folders behind.
+    tmp: testkit::Scratch,
 }
 
 impl Driver {
@@ -30,8 +33,10 @@ impl Driver {
             .local_addr()
             .unwrap()
             .port();
+        let tmp = testkit::Scratch::new("chromium");
         let child = Command::new("chromedriver")
             .arg(format!("--port={port}"))
+            .env("TMPDIR", &tmp)
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
@@ -47,6 +52,7 @@ impl Driver {
         Driver {
             child,
             url: format!("http://127.0.0.1:{port}"),
+            tmp,
         }
     }
 

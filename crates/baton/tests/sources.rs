@@ -1,16 +1,11 @@
 //! Frames from files, through the same path `orch baton` uses ([`source::open`]).
 
-use std::path::PathBuf;
-
 use orch_baton::source::{self, FrameSource, SourceError, Y4mWriter};
 use orch_baton::synth::{self, Script, Video};
 use orch_baton::{Baton, Beat, Frame};
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("orch-baton-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn scratch(name: &str) -> testkit::Scratch {
+    testkit::Scratch::new(&format!("baton-{name}"))
 }
 
 fn run(src: &mut dyn FrameSource) -> (Vec<Beat>, usize) {
@@ -70,7 +65,6 @@ fn y4m_round_trip() {
     // --fps wins over the header.
     let src = source::open(&path, Some(60.0)).unwrap();
     assert_eq!(src.fps(), 60.0);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -96,7 +90,6 @@ fn png_folder_in_numeric_order() {
         matches!(&e, SourceError::BadInput(m) if m.contains("--fps")),
         "{e}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -150,7 +143,6 @@ fn bad_input_is_refused_clearly() {
     if !have_ffmpeg {
         assert!(m.contains("ffmpeg") && m.contains("not installed"), "{m}");
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -190,7 +182,6 @@ fn any_other_video_through_ffmpeg_when_it_is_installed() {
     let score = synth::score(&video, &beats, frames);
     assert_eq!((score.missed, score.invented), (0, 0), "{score:?}");
     assert!(score.beat_err_ms.0 < 1000.0 / 30.0 + 10.0, "{score:?}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

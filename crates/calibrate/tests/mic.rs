@@ -4,7 +4,7 @@
 //! `asoundrc` of the test's own, which alsa.conf loads from `$XDG_CONFIG_HOME/alsa/asoundrc`.
 #![cfg(feature = "mic")]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
@@ -38,7 +38,10 @@ struct Fixture {
 fn fixture() -> &'static Fixture {
     static F: OnceLock<Fixture> = OnceLock::new();
     F.get_or_init(|| {
-        let dir = std::env::temp_dir().join(format!("orch-mic-{}", std::process::id()));
+        // Under the target folder, not the system's temporary one: the same folder each run
+        // (a fixture for every test of this process, it outlives them all).
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("orch-calibrate-mic");
+        let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(dir.join("alsa")).unwrap();
         let robot = Robot::from_toml(FIVE).unwrap();
         let score = Score::for_robot(&robot, LEVELS).unwrap();

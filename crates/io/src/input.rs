@@ -537,8 +537,7 @@ mod tests {
     #[test]
     fn a_raw_midi_device_that_goes_away_is_lost_then_back_at_the_same_path() {
         use std::io::Write;
-        let link = std::env::temp_dir().join(format!("orch-in-dev-{}", std::process::id()));
-        let _ = std::fs::remove_file(&link);
+        let link = testkit::in_test("dev");
         let (mut first, path) = pty();
         std::os::unix::fs::symlink(&path, &link).unwrap();
         let (tx, rx) = std::sync::mpsc::channel::<InEvent>();
@@ -581,7 +580,7 @@ mod tests {
             other => panic!("{other:?}"),
         }
 
-        let path = std::env::temp_dir().join(format!("orch-in-{}", std::process::id()));
+        let path = testkit::in_test("in");
         std::fs::write(&path, [0x80, 60, 0]).unwrap();
         let (tx, rx) = std::sync::mpsc::channel::<InEvent>();
         let _file = MidiIn::open(&InTarget::RawMidi(path.clone()), tx).unwrap();

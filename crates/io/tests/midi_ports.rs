@@ -96,8 +96,7 @@ fn serial_through_a_pseudo_terminal_at_31250_baud_carries_exactly_the_planned_by
 }
 
 fn fifo(name: &str) -> PathBuf {
-    let path = std::env::temp_dir().join(format!("orch-io-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_file(&path);
+    let path = testkit::in_test(name);
     nix::unistd::mkfifo(&path, nix::sys::stat::Mode::S_IRWXU).unwrap();
     path
 }

@@ -6,9 +6,7 @@ use std::path::PathBuf;
 use orch_robot::{Robot, RobotError};
 
 fn temp_file(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("orch-robot-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
+    let path = testkit::in_test(name);
     std::fs::write(&path, text).unwrap();
     path
 }

@@ -129,20 +129,17 @@ mod tests {
         let (robot, text) = load_robot_text(None).unwrap();
         assert_eq!(text, orch_robot::DEFAULT_TOML);
         assert_eq!(robot.config, Robot::thesis().config);
-        let dir = std::env::temp_dir().join(format!("orch-stage-load-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("robot.toml");
+        let path = testkit::in_test("robot.toml");
         let written = format!("# mine\n{}", orch_robot::DEFAULT_TOML);
         std::fs::write(&path, &written).unwrap();
         let (robot, text) = load_robot_text(Some(&path)).unwrap();
         assert_eq!(text, written);
         assert_eq!(robot.config, Robot::thesis().config);
-        let missing = dir.join("none.toml");
+        let missing = testkit::in_test("none.toml");
         assert!(matches!(
             load_robot_text(Some(&missing)),
             Err(RobotError::Read { .. })
         ));
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     /// A reader of endless bytes that counts what was read from it.

@@ -12,8 +12,7 @@ use orch_stage::play::{Play, PlayError};
 
 /// `beats` quarter notes at 120 BPM written to a file of its own.
 fn song_file(name: &str, beats: u32) -> PathBuf {
-    let path =
-        std::env::temp_dir().join(format!("orch-stage-play-{}-{name}.mid", std::process::id()));
+    let path = testkit::in_test(&format!("{name}.mid"));
     std::fs::write(&path, testkit::smf::quarters_smf(beats, 120.0)).unwrap();
     path
 }

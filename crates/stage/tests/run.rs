@@ -99,9 +99,7 @@ fn stop_and_the_front_end_end_it_and_a_robot_file_read_again_takes_over() {
     });
     assert!(matches!(end, End::Quit), "{end:?}");
 
-    let dir = std::env::temp_dir().join(format!("orch-stage-run-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("robot.toml");
+    let path = testkit::in_test("robot.toml");
     std::fs::write(&path, "not = [a robot").unwrap();
     let (said, _) = run(
         &mut live,

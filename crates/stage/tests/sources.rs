@@ -21,9 +21,7 @@ fn a_midi_clock_file_is_followed_to_its_end_beat_by_beat() {
     let mut bytes = vec![0xFA];
     bytes.extend(std::iter::repeat_n(0xF8, 24 * 8));
     bytes.push(0xFC);
-    let dir = std::env::temp_dir().join(format!("orch-stage-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("clock.bin");
+    let file = testkit::in_test("clock.bin");
     std::fs::write(&file, &bytes).unwrap();
     let spec = SourceSpec::parse(&format!("midi-clock:{}", file.display())).unwrap();
     assert_eq!(source_name(&spec), "MIDI clock clock.bin");

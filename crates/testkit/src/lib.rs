@@ -9,6 +9,7 @@
 //! - `conducted` (feature `conduct`): a conductor on the virtual clock, its beats through a
 //!   source's decoder and the follower to a performance.
 //! - `sf2` (feature `sf2`): SoundFonts written here, whose sound starts on its first sample.
+//! - [`Scratch`], [`in_test`]: a test's scratch folder, removed when it ends.
 //! - [`lines`]: the function-length scanner the crates' `function_length` tests share.
 //! - [`fuzz`]: the fuzz targets' checks (features `fuzz-interpret`, `fuzz-smf`, `fuzz-rtp`,
 //!   `fuzz-robot-toml`) and the replay of a corpus through them.
@@ -24,6 +25,9 @@ pub mod conducted;
 pub mod examples;
 pub mod fuzz;
 pub mod lines;
+mod scratch;
 #[cfg(feature = "sf2")]
 pub mod sf2;
 pub mod smf;
+
+pub use scratch::{in_test, Scratch};
