@@ -10,7 +10,8 @@ thread_local! {
     static TEST: Scratch = Scratch::new(&test_tag());
 }
 
-/// `name` in the running test's own scratch folder, removed when the test ends.
+/// `name` in the running test's own scratch folder, removed when the test ends, failed or
+/// not (a [`Scratch`] the test holds is kept when it fails).
 ///
 /// The test harness runs each test on a thread of its own, so the folder is the thread's: a
 /// thread the test spawns has another one, removed when that thread ends. Files a test
@@ -37,7 +38,8 @@ fn test_tag() -> String {
 }
 
 /// A scratch folder, named `orch-TAG-…`; a [`Path`] by deref, so `scratch.join("robot.toml")`
-/// names a file in it.
+/// names a file in it. Hold it while its files are needed: `Scratch::new(tag).join(name)`
+/// removes the folder at the end of the statement (for a file alone, see [`in_test`]).
 ///
 /// ```
 /// let scratch = testkit::Scratch::new("doc");
