@@ -78,7 +78,8 @@ RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features
 
 step "book: mdbook build book (tests/book.rs, in the tests below, checks its links and runs its examples)"
 if [ -n "$mdbook_pid" ]; then
-    wait "$mdbook_pid" || { cat "$mdbook_log"; echo "installing mdbook failed"; exit 1; }
+    wait "$mdbook_pid" || { cat "$mdbook_log"; rm -f "$mdbook_log"; echo "installing mdbook failed"; exit 1; }
+    rm -f "$mdbook_log"
 fi
 mdbook build book
 
