@@ -44,7 +44,7 @@ mod imp {
     use orch_link::session::{
         follow, Following, Leading, Session, ALONE_AFTER, DISCOVERY, DISCOVERY_GROUP,
     };
-    use orch_link::{entry, Lead, Steer, Timeline};
+    use orch_link::{entry, Lead, Steer, StopGuard, Timeline};
     use orch_perform::{Control, Planner, ScoreBeats, Setup, Tempo, WallTime};
     use orch_seq::Song;
 
@@ -166,6 +166,7 @@ mod imp {
         pub fn end(self) {
             let led = self.0.finish();
             eprintln!("orch: --link: stopped the Link session");
+            said_again(led.restops);
             tracing::debug!(
                 "--link: {} tempos published, {} beats forced, {} announcements",
                 led.tempos,
@@ -175,8 +176,19 @@ mod imp {
         }
     }
 
+    /// Says that this peer stopped the session `restops` more times after its stop (an
+    /// announcement that it played had crossed the stop), if it did.
+    fn said_again(restops: u64) {
+        if restops > 0 {
+            eprintln!(
+                "orch: --link: stopped the session again ({restops}x): a peer that had not yet \
+                 heard of the stop said it played"
+            );
+        }
+    }
+
     /// The session as `orch serve`'s page shows and steers it.
-    struct PageSession(Session);
+    struct PageSession(Arc<Session>);
 
     impl orch_serve::Session for PageSession {
         fn status(&self) -> orch_serve::SessionStatus {
@@ -192,8 +204,14 @@ mod imp {
             self.0.start();
         }
 
+        /// Stops the session, and guards the stop for a moment from a thread of its own.
         fn stop(&self) {
-            self.0.stop();
+            let at = self.0.stop();
+            let session = Arc::clone(&self.0);
+            std::thread::spawn(move || {
+                let restops = session.guard_stop(StopGuard::at(at, session.host_us()));
+                said_again(restops);
+            });
         }
 
         fn set_tempo(&self, bpm: f64) {
@@ -203,7 +221,7 @@ mod imp {
 
     /// Joins the session for `orch serve --link`'s page.
     pub fn page_session() -> anyhow::Result<Arc<dyn orch_serve::Session>> {
-        Ok(Arc::new(PageSession(Session::join(120.0))))
+        Ok(Arc::new(PageSession(Arc::new(Session::join(120.0)))))
     }
 
     /// The follower, running.
@@ -215,6 +233,7 @@ mod imp {
             let f = self.0.finish();
             if f.stopped_by_session {
                 eprintln!("orch: --link: the session stopped");
+                said_again(f.restops);
             }
             tracing::debug!(
                 "--link: {} tempo factors, {} jumps, {} announcements",

@@ -18,7 +18,8 @@
 //! One piece, as a rehearsal goes: three robots wait; the independent peer starts the
 //! session; they come in together on bar one; it changes the tempo; a fourth robot joins
 //! mid-piece and comes in on the beat, at the score's place there; it stops the session, and
-//! every robot stops with every key up. Four robots send at the score's time
+//! every robot stops with every key up; it plays the session again since its old start, as
+//! a robot's announcement that crossed the stop would, and the robots stop it again. Four robots send at the score's time
 //! (`--no-compensation`), so the moment a message arrives is the moment its note sounds on a
 //! robot that strikes at once; a fifth sends each note early by its own mechanics, and its
 //! report says its copy sounded each on time.
@@ -399,9 +400,15 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
     std::thread::sleep(Duration::from_secs(3));
     let stopped = peer.ask("stop");
     let stop_us = stopped[0];
+    // A robot that says the session plays (as each does every second, for newcomers) before
+    // the stop has reached it leaves the session playing again, since its old start: the
+    // peer does that here, once the robots have stopped. They stop the session again.
+    std::thread::sleep(Duration::from_millis(300));
+    peer.ask("cross");
     let compensated = exited(compensated, Duration::from_secs(10));
     let compensated_err = String::from_utf8_lossy(&compensated.stderr).into_owned();
     assert!(compensated.status.success(), "{compensated_err}");
+    let mut said = vec![compensated_err.clone()];
     let compensated: Value = serde_json::from_slice(&compensated.stdout).unwrap();
     let mut ended = Vec::new();
     for (i, r) in robots.into_iter().enumerate() {
@@ -416,7 +423,13 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
             i + 1
         );
         ended.push(serde_json::from_slice::<Value>(&out.stdout).unwrap());
+        said.push(err.into_owned());
     }
+    assert_eq!(peer.ask("now")[3], 0.0, "the crossed stop: playing again");
+    assert!(
+        said.iter().any(|e| e.contains("stopped the session again")),
+        "{said:?}"
+    );
     let report = peer.report();
     let all = onsets(&report);
     let by = |r: usize| of_robot(&all, r);

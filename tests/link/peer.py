@@ -5,8 +5,10 @@ ports, and every message is stamped with the moment it arrived (the kernel's rec
 timestamp, so that this process's own scheduling delays nothing) in this peer's view of the
 session (its host time, beat and tempo).
 
-Commands, one a line: `tempo BPM`, `start`, `stop`, `now`, `peers` (prints the number of other
-peers), `report` (prints every message received as one JSON line), `quit`. Each command is
+Commands, one a line: `tempo BPM`, `start`, `stop`, `cross` (plays again since the start the
+last `stop` ended: what an announcement that crossed the stop leaves), `now` (prints the host
+time, beat, tempo and 1 if the session plays), `peers` (prints the number of other peers),
+`report` (prints every message received as one JSON line), `quit`. Each command is
 answered with one line (`ok ...`) once done."""
 
 import json
@@ -68,6 +70,7 @@ def main():
 
     threading.Thread(target=collect, daemon=True).start()
     print("ready", flush=True)
+    stopped_start = None
     for line in sys.stdin:
         words = line.split()
         if not words:
@@ -81,7 +84,13 @@ def main():
             state.setIsPlaying(True, now)
             session.commitAppSessionState(state)
         elif words[0] == "stop":
+            stopped_start = state.timeForIsPlaying()
             state.setIsPlaying(False, now)
+            session.commitAppSessionState(state)
+        elif words[0] == "cross" and stopped_start is not None:
+            # What a peer's announcement that crossed the last stop leaves: the session
+            # playing again since the start it had (a µs off, as an orch peer announces it).
+            state.setIsPlaying(True, stopped_start + 1)
             session.commitAppSessionState(state)
         elif words[0] == "peers":
             print("ok", session.numPeers(), flush=True)

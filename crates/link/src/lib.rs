@@ -37,6 +37,7 @@
 
 pub mod announce;
 pub mod entry;
+pub mod guard;
 pub mod lead;
 #[cfg(feature = "abl")]
 pub mod session;
@@ -45,6 +46,7 @@ pub mod timeline;
 
 pub use announce::{Anchor, REANCHOR_US};
 pub use entry::{bar_one, entry, Entry, LEAD_IN_BEATS};
+pub use guard::{StopGuard, Watch, GUARD_MAX_US, GUARD_US};
 pub use lead::{bar_line_after, Lead, Publish, LEAD_IN_MARGIN};
 pub use steer::{Steer, Step, HORIZON_US, JUMP_QUARTERS, SLACK};
 pub use timeline::{Line, Timeline};

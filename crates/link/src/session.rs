@@ -26,6 +26,7 @@ use orch_perform::Control;
 use rusty_link::{AblLink, SessionState};
 
 use crate::announce::Anchor;
+use crate::guard::{StopGuard, Watch};
 use crate::lead::{bar_line_after, Lead, Publish};
 use crate::steer::{Steer, Step};
 use crate::timeline::Timeline;
@@ -38,10 +39,6 @@ pub const LOOK_EVERY: Duration = Duration::from_millis(2);
 /// joins): a newcomer takes no announcement before it has joined the session, which on a lossy
 /// network may take seconds.
 pub const ANNOUNCE_EVERY: Duration = Duration::from_millis(1_000);
-
-/// How long a leader's session stays open after it stopped the session, for the news to go
-/// out before the process may end (seen: without it, robots on other hosts played on).
-pub const STOP_LINGER: Duration = Duration::from_millis(500);
 
 /// How long a peer listens for a session before `--start` starts one: Link's discovery
 /// answers within a few hundred ms on a LAN.
@@ -118,9 +115,33 @@ impl Session {
         self.commit(|s, now| s.set_is_playing(true, now));
     }
 
-    /// Stops the session.
-    pub fn stop(&self) {
-        self.commit(|s, now| s.set_is_playing(false, now));
+    /// Stops the session; the moment it stopped at, host µs (for a [`StopGuard`]).
+    pub fn stop(&self) -> i64 {
+        let mut at = 0;
+        self.commit(|s, now| {
+            s.set_is_playing(false, now);
+            at = now;
+        });
+        at
+    }
+
+    /// Keeps `guard` over a stop: looks every [`LOOK_EVERY`] until the guard is over, and
+    /// stops the session again whenever an announcement that crossed the stop has it playing
+    /// again (see [`guard`](crate::guard)). The times it stopped it again. Meanwhile the
+    /// stop's news goes out: the process may end once this returns.
+    pub fn guard_stop(&self, mut guard: StopGuard) -> u64 {
+        let mut restops = 0;
+        loop {
+            match guard.look(&self.capture(), self.host_us()) {
+                Watch::Quiet => {}
+                Watch::Restop => {
+                    self.stop();
+                    restops += 1;
+                }
+                Watch::Over => return restops,
+            }
+            thread::sleep(LOOK_EVERY);
+        }
     }
 
     /// Sets the session's tempo from now (the beat now stays where it is).
@@ -244,6 +265,9 @@ pub struct Followed {
     pub announced: u64,
     /// Whether the session stopped the performance.
     pub stopped_by_session: bool,
+    /// Times this peer stopped the session again, after it stopped: an announcement that
+    /// crossed the stop had it playing (see [`guard`](crate::guard)).
+    pub restops: u64,
 }
 
 /// A thread keeping a performance on the session's beat. [`finish`](Self::finish) ends it.
@@ -262,7 +286,8 @@ impl Following {
 
 /// Keeps the performance that `control` steers (its clock's zero at `origin`) on the
 /// session's beat as `steer` says, looking every [`LOOK_EVERY`]; stops it, every key up, when
-/// the session stops; announces the session to newcomers (see [`ANNOUNCE_EVERY`]).
+/// the session stops, and then guards that stop (see [`guard`](crate::guard)) before it
+/// ends; announces the session to newcomers (see [`ANNOUNCE_EVERY`]).
 pub fn follow(
     session: Arc<Session>,
     control: Arc<Control>,
@@ -274,6 +299,7 @@ pub fn follow(
     let thread = thread::spawn(move || {
         let mut followed = Followed::default();
         let mut announcer = Announcer::new(&session);
+        let mut guard = None;
         while !flag.load(Ordering::SeqCst) && !control.stopping() {
             thread::sleep(LOOK_EVERY);
             followed.announced += announcer.look(&session);
@@ -295,8 +321,12 @@ pub fn follow(
                 Step::Stop => {
                     control.stop();
                     followed.stopped_by_session = true;
+                    guard = Some(StopGuard::after(&timeline, host));
                 }
             }
+        }
+        if let Some(guard) = guard {
+            followed.restops = session.guard_stop(guard);
         }
         followed
     });
@@ -312,6 +342,9 @@ pub struct Led {
     pub beats: u64,
     /// Announcements to newcomers.
     pub announced: u64,
+    /// Times the session was stopped again after the leader's stop (see
+    /// [`guard`](crate::guard)).
+    pub restops: u64,
 }
 
 /// A thread telling the session where a performance stands. [`finish`](Self::finish) ends it
@@ -323,6 +356,7 @@ pub struct Leading {
 
 impl Leading {
     /// Ends the leading (the performance ended) and stops the session: every robot stops.
+    /// Returns once the stop has been guarded (see [`guard`](crate::guard)): about a second.
     pub fn finish(self) -> Led {
         self.done.store(true, Ordering::SeqCst);
         self.thread.join().unwrap_or_default()
@@ -331,7 +365,8 @@ impl Leading {
 
 /// Publishes the tempo and phase of the performance that `control` steers (its clock's zero
 /// at `origin`) to the session as `lead` says, every [`LOOK_EVERY`], until
-/// [`Leading::finish`]; then stops the session. Announces the session to each newcomer.
+/// [`Leading::finish`]; then stops the session and guards the stop. Announces the session to
+/// each newcomer.
 pub fn lead(
     session: Arc<Session>,
     control: Arc<Control>,
@@ -364,10 +399,10 @@ pub fn lead(
                 }
             }
         }
-        session.stop();
-        // The SDK sends the change from a thread of its own: the session stays open a moment
-        // so the news leaves before the process may end.
-        thread::sleep(STOP_LINGER);
+        let at = session.stop();
+        // The guard also keeps the session open while the SDK sends the stop from a thread of
+        // its own (seen: a leader that left at once left robots on other hosts playing).
+        led.restops = session.guard_stop(StopGuard::at(at, session.host_us()));
         led
     });
     Leading { done, thread }
