@@ -5,10 +5,11 @@
 //! last, on any peer. So a peer that announces between another peer's stop and the moment
 //! that stop reaches it has committed "playing" after the stop: its announcement wins
 //! everywhere, and the session plays on, from its old start, with nobody there to stop it
-//! (seen in `tests/link.rs`: a conductor stopped the session, and one robot played on). That
-//! window is not short: the SDK sends a peer's changes at most every 50 ms, so a stop may take
-//! that long, plus the network's delay, to reach the others. With two robots announcing once a
-//! second, some stops in twenty were crossed.
+//! (seen in two CI runs of `tests/link.rs`: a conductor stopped the session, and one robot
+//! played on). That window is some ms: the network's delay, and up to 50 ms more when the
+//! stopping peer's SDK had sent anything in the last 50 ms (it sends a peer's changes at most
+//! that often). So each robot announcing once a second crosses about one stop in a couple of
+//! hundred, more on a busy host (none in 16 runs of that test on an idle machine).
 //!
 //! Such a state is easy to tell from a real start: it plays since a moment *before* the stop
 //! (the start it announced again), while a peer that starts the session after a stop starts it
@@ -19,8 +20,8 @@
 //! older than its own), so it is the others' guards that stop it: the peer that stopped the
 //! session (a conductor, `orch serve`'s page) and every robot that heard the stop. A session
 //! stopped by another app (a DAW) with a single orch robot in it has nobody to guard it: the
-//! chance there is the stop's delay (up to some 50 ms) over the second between two
-//! announcements, a few stops in a hundred.
+//! chance there is that window over the second between two announcements: about one stop in
+//! a couple of hundred.
 
 use crate::announce::REANCHOR_US;
 use crate::timeline::Timeline;
