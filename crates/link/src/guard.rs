@@ -30,7 +30,7 @@ use crate::timeline::Timeline;
 /// it within the network's delay, or a few of Link's rebroadcasts (every 250 ms) if lost.
 pub const GUARD_US: i64 = 1_000_000;
 
-/// The longest a guard lasts, µs from the stop, however many announcements it undoes.
+/// The longest a guard lasts, µs from its beginning, however many announcements it undoes.
 pub const GUARD_MAX_US: i64 = 10_000_000;
 
 /// What a look at the session finds.
@@ -77,12 +77,14 @@ impl StopGuard {
     }
 
     /// A guard over a stop at host time `stopped_at` (the moment a stop committed here
-    /// gave), from host time `now_us`.
+    /// gave), from host time `now_us`. A stop set for a later moment (an app may stop at the
+    /// next bar line) is guarded from now: a real start may come before that moment.
     pub fn at(stopped_at: i64, now_us: i64) -> Self {
+        let stopped_at = stopped_at.min(now_us);
         Self {
             stopped_at,
             until: now_us + GUARD_US,
-            last: stopped_at.max(now_us) + GUARD_MAX_US,
+            last: now_us + GUARD_MAX_US,
         }
     }
 
@@ -181,6 +183,20 @@ mod tests {
             ..playing_since(40.0)
         };
         assert_eq!(g.look(&start, 20_002_000), Watch::Over);
+    }
+
+    #[test]
+    fn a_stop_set_for_a_later_bar_line_is_guarded_from_when_it_was_seen() {
+        // Stopped for beat 48 (24 s), seen at 20 s; another peer starts it again at 20.5 s.
+        let later = Line {
+            started_beat: 48.0,
+            ..stopped()
+        };
+        let mut g = StopGuard::after(&later, 20_000_000);
+        assert_eq!(g.look(&playing_since(41.0), 20_500_000), Watch::Over);
+        // While the old start played again is still stopped again.
+        let mut g = StopGuard::after(&later, 20_000_000);
+        assert_eq!(g.look(&playing_since(8.0), 20_500_000), Watch::Restop);
     }
 
     #[test]
