@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::Context;
-use orch_io::{OutSpec, Target};
+use orch_io::OutSpec;
 use orch_perform::{Setup, Tempo};
 use orch_seq::Song;
 use orch_stage::play::{Leaves, Play, PlayError};
@@ -62,29 +62,24 @@ pub fn run_play(args: &PlayArgs) -> anyhow::Result<()> {
 /// `orch play --link`: the song steered by an Ableton Link session, which must be joined
 /// (after the song, the robot and the tempo are read, before the files and the outputs are
 /// opened) and followed while the song plays; step by step here until the session builder
-/// takes a Link clock (see `orch_stage::play::Play::steered_by` and `Play::clock`).
+/// takes a Link clock (see `orch_stage::play::Play::steered_by` and `Play::clock`). `--fast`
+/// and `--from` do not go with `--link` (clap refuses them): the session sets the pace and
+/// the place.
 fn run_linked(args: &PlayArgs) -> anyhow::Result<()> {
     let song = load_song(&args.file)?;
-    let from_us = from_bar(&song, args.from)?;
     let robot = load_robot(args.robot.as_deref())?;
     let mut setup = orch_stage::setup::setup(&robot, !args.no_compensation, tempo(args.tempo)?);
-    if args.link && args.tempo != 1.0 {
+    if args.tempo != 1.0 {
         return Err(bad_input(
             "--tempo: with --link the session sets the pace; leave out --tempo",
         ));
     }
-    // With --link: joined, and the session playing, before anything opens; the tempo is the
-    // session's.
-    let joined = if args.link {
-        let give_up = orch_stage::signals::stop_flag()?;
-        let Some(joined) = crate::link::join(&song, &setup, args.start, &give_up)? else {
-            return Ok(());
-        };
-        setup.tempo = joined.tempo;
-        Some(joined)
-    } else {
-        None
+    // Joined, and the session playing, before anything opens; the tempo is the session's.
+    let give_up = orch_stage::signals::stop_flag()?;
+    let Some(joined) = crate::link::join(&song, &setup, args.start, &give_up)? else {
+        return Ok(());
     };
+    setup.tempo = joined.tempo;
     if args.writes.is_some() {
         // Every write is kept for the file, not only the presses the report needs.
         setup.sim.keep = orch_sim::Keep::Everything;
@@ -93,30 +88,16 @@ fn run_linked(args: &PlayArgs) -> anyhow::Result<()> {
     let notes_file = create(&args.notes, "--notes")?;
     // The song is kept for the account's bars and beats (a live play takes it).
     let song_for_notes = args.notes.is_some().then(|| song.clone());
-    let specs = out_specs(&args.outs)?;
-    if args.fast {
-        if let Some(s) = specs.iter().find(|s| s.target != Target::Sim) {
-            return Err(bad_input(format!(
-                "--fast renders on the virtual clock, as fast as the machine goes: it cannot \
-                 play --out {}; leave out --fast",
-                s.text
-            )));
-        }
-    }
-    let lanes = open_lanes(specs, &setup)?;
-    let played = if args.fast {
-        orch_stage::setup::play_lanes_fast(&song, lanes, from_us)?
-    } else {
-        let live = LiveOptions {
-            command: "orch play",
-            view: !args.no_view,
-            file: &args.file,
-            from_us: joined.as_ref().map_or(from_us, |j| j.from_us),
-            conductor: None,
-            steered: joined.as_ref().map(|j| (Arc::clone(&j.control), j.origin)),
-        };
-        play_linked(song, lanes, live, joined.as_ref())?
+    let lanes = open_lanes(out_specs(&args.outs)?, &setup)?;
+    let live = LiveOptions {
+        command: "orch play",
+        view: !args.no_view,
+        file: &args.file,
+        from_us: joined.from_us,
+        conductor: None,
+        steered: Some((Arc::clone(&joined.control), joined.origin)),
     };
+    let played = play_linked(song, lanes, live, &joined)?;
     if let (Some(mut file), Some(path)) = (writes, &args.writes) {
         orch_stage::account::write_board_writes(&mut file, &played)
             .with_context(|| format!("--writes {}", path.display()))?;
@@ -134,17 +115,21 @@ fn play_linked(
     song: Song,
     lanes: Vec<Lane>,
     live: LiveOptions<'_>,
-    joined: Option<&crate::link::Joined>,
+    joined: &crate::link::Joined,
 ) -> anyhow::Result<Vec<Ended>> {
     #[cfg(feature = "link")]
-    if let Some(j) = joined {
-        let following = j.follow();
+    {
+        let following = joined.follow();
         let played = play_live(song, lanes, live);
         following.end();
-        return played;
+        played
     }
-    let _ = joined;
-    play_live(song, lanes, live)
+    #[cfg(not(feature = "link"))]
+    {
+        // Never joined without the feature (`join` refuses), so never here.
+        let _ = joined;
+        play_live(song, lanes, live)
+    }
 }
 
 /// A play's error as `orch play` says it: with the option at fault, bad input (exit 2) where
