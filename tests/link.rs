@@ -19,10 +19,10 @@
 //! session; they come in together on bar one; it changes the tempo; a fourth robot joins
 //! mid-piece and comes in on the beat, at the score's place there; it stops the session, and
 //! every robot stops with every key up; it plays the session again since its old start, as
-//! a robot's announcement that crossed the stop would, and the robots stop it again. Four robots send at the score's time
-//! (`--no-compensation`), so the moment a message arrives is the moment its note sounds on a
-//! robot that strikes at once; a fifth sends each note early by its own mechanics, and its
-//! report says its copy sounded each on time.
+//! a robot's announcement that crossed the stop would, and the robots stop it again. Four
+//! robots send at the score's time (`--no-compensation`), so the moment a message arrives is
+//! the moment its note sounds on a robot that strikes at once; a fifth sends each note early
+//! by its own mechanics, and its report says its copy sounded each on time.
 
 #![cfg(feature = "link")]
 
@@ -796,15 +796,33 @@ fn a_conductor_leads_robots_on_other_hosts() {
     let fast_at = tempo(150.0);
     std::thread::sleep(Duration::from_secs(3));
     let slow_at = tempo(100.0);
-    let conductor = exited(conductor, Duration::from_secs(20));
-    let err = String::from_utf8_lossy(&conductor.stderr);
+    // Once the conductor has stopped the session, an announcement that crossed its stop (here
+    // the independent peer's): the conductor and the robots stop the session again.
+    let until = Instant::now() + Duration::from_secs(20);
+    while peer.ask("now")[3] == 1.0 {
+        assert!(
+            Instant::now() < until,
+            "the conductor never stopped the session"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    peer.ask("cross");
+    let conductor = exited(conductor, Duration::from_secs(10));
+    let err = String::from_utf8_lossy(&conductor.stderr).into_owned();
     assert!(conductor.status.success(), "{err}");
     assert!(err.contains("stopped the Link session"), "{err}");
+    let mut said = vec![err];
     for r in robots {
         let out = exited(r, Duration::from_secs(10));
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains("the session stopped"), "{err}");
+        said.push(err.into_owned());
     }
+    assert_eq!(peer.ask("now")[3], 0.0, "the crossed stop: playing again");
+    assert!(
+        said.iter().any(|e| e.contains("stopped the session again")),
+        "{said:?}"
+    );
     let all = onsets(&peer.report());
     let by = |r: usize| of_robot(&all, r);
     // The conductor played its 24 quarters; the robots with it, on the same beats, the same
@@ -945,9 +963,17 @@ fn the_web_page_shows_and_steers_the_session() {
     );
     assert_eq!(code, 400);
     curl(&net, 1, 8790, "POST", Some(r#"{"stop": true}"#));
+    // An announcement that crossed the page's stop (here the peer's): the page stops the
+    // session again.
+    std::thread::sleep(Duration::from_millis(200));
+    peer.ask("cross");
     settle();
     let now = peer.ask("now");
     assert!(near(now[2], 90.0) && now[3] == 0.0, "{now:?}");
+    // The page says so when its guard ends, a second after its last stop.
+    std::thread::sleep(Duration::from_secs(1));
     let _ = serve.kill();
-    let _ = serve.wait();
+    let out = serve.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("stopped the session again"), "{err}");
 }

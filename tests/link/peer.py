@@ -6,7 +6,8 @@ timestamp, so that this process's own scheduling delays nothing) in this peer's 
 session (its host time, beat and tempo).
 
 Commands, one a line: `tempo BPM`, `start`, `stop`, `cross` (plays again since the start the
-last `stop` ended: what an announcement that crossed the stop leaves), `now` (prints the host
+session had when this peer last saw it play: what an announcement that crossed a stop
+leaves), `now` (prints the host
 time, beat, tempo and 1 if the session plays), `peers` (prints the number of other peers),
 `report` (prints every message received as one JSON line), `quit`. Each command is
 answered with one line (`ok ...`) once done."""
@@ -70,13 +71,15 @@ def main():
 
     threading.Thread(target=collect, daemon=True).start()
     print("ready", flush=True)
-    stopped_start = None
+    played_since = None
     for line in sys.stdin:
         words = line.split()
         if not words:
             continue
         now = session.clock().micros()
         state = session.captureAppSessionState()
+        if state.isPlaying():
+            played_since = state.timeForIsPlaying()
         if words[0] == "tempo":
             state.setTempo(float(words[1]), now)
             session.commitAppSessionState(state)
@@ -84,13 +87,12 @@ def main():
             state.setIsPlaying(True, now)
             session.commitAppSessionState(state)
         elif words[0] == "stop":
-            stopped_start = state.timeForIsPlaying()
             state.setIsPlaying(False, now)
             session.commitAppSessionState(state)
-        elif words[0] == "cross" and stopped_start is not None:
-            # What a peer's announcement that crossed the last stop leaves: the session
-            # playing again since the start it had (a µs off, as an orch peer announces it).
-            state.setIsPlaying(True, stopped_start + 1)
+        elif words[0] == "cross" and played_since is not None:
+            # What a peer's announcement that crossed a stop leaves: the session playing
+            # again since the start it had (a µs off, as an orch peer announces it).
+            state.setIsPlaying(True, played_since + 1)
             session.commitAppSessionState(state)
         elif words[0] == "peers":
             print("ok", session.numPeers(), flush=True)

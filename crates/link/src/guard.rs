@@ -98,8 +98,9 @@ impl StopGuard {
         if !timeline.is_playing() {
             return Watch::Quiet;
         }
-        // A start a few µs past the stop is the stop's own moment seen through another
-        // host's clock; a real start is at the starter's now, after it heard of the stop.
+        // A start up to a few µs before the stop may be the stop's own moment, seen through
+        // another host's clock; a real start is at the starter's now, after it heard of the
+        // stop.
         if timeline.started_at() + REANCHOR_US < self.stopped_at {
             self.until = (now_us + GUARD_US).min(self.last);
             Watch::Restop
