@@ -40,6 +40,9 @@ const ON_BEAT_MS: f64 = 3.0;
 /// How long after a tempo change, µs, a robot's notes may be off their beat: see the first
 /// test.
 const CHANGE_US: f64 = 1e6;
+/// The most a lone note may arrive off its beat through a stall of the host, ms: see the
+/// first test.
+const STALL_MS: f64 = 20.0;
 
 fn ip(args: &[&str]) {
     let out = Command::new("ip")
@@ -357,6 +360,50 @@ fn of_robot(all: &[Onset], r: usize) -> Vec<Onset> {
     all.iter().filter(|o| o.robot == r).copied().collect()
 }
 
+/// The notes of one robot's `notes` (in order) that are ON_BEAT_MS or more off their beat
+/// while the notes on either side of them are within 1 ms: late alone, as a stall of the host
+/// makes a note, where a phase error moves every note after it.
+fn lone_late(notes: &[Onset]) -> Vec<Onset> {
+    let on_beat = |o: Option<&Onset>| o.is_none_or(|o| o.off_ms().abs() < 1.0);
+    (0..notes.len())
+        .filter(|&i| notes[i].off_ms().abs() >= ON_BEAT_MS)
+        .filter(|&i| {
+            notes.len() > 1
+                && on_beat(i.checked_sub(1).map(|j| &notes[j]))
+                && on_beat(notes.get(i + 1))
+        })
+        .map(|i| notes[i])
+        .collect()
+}
+
+#[test]
+fn a_lone_late_note_is_a_stall_and_notes_late_together_are_not() {
+    // Beats at 120 BPM, each note `off` ms after its beat.
+    let notes = |offs: &[f64]| -> Vec<Onset> {
+        offs.iter()
+            .enumerate()
+            .map(|(i, off)| Onset {
+                robot: 0,
+                note: 48,
+                host_us: i as f64 * 5e5 + off * 1e3,
+                beat: i as f64 + off / 500.0,
+                bpm: 120.0,
+            })
+            .collect()
+    };
+    let late =
+        |offs: &[f64]| -> Vec<f64> { lone_late(&notes(offs)).iter().map(Onset::off_ms).collect() };
+    let near = |a: &[f64], b: &[f64]| {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6)
+    };
+    assert!(near(&late(&[0.1, 6.3, 0.1, 0.2]), &[6.3]));
+    assert!(near(&late(&[6.3, 0.1, 0.2]), &[6.3]));
+    assert!(late(&[0.1, 6.3, 5.0, 0.2]).is_empty());
+    assert!(late(&[0.1, 6.3, 1.5]).is_empty());
+    assert!(late(&[0.1, 2.9, 0.1]).is_empty());
+    assert!(late(&[6.3]).is_empty());
+}
+
 fn percentile(sorted: &[f64], p: f64) -> f64 {
     sorted[((p * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len()) - 1]
 }
@@ -484,15 +531,66 @@ fn robots_on_four_hosts_play_in_phase_with_an_independent_peer() {
         changing.len(),
         changing.iter().copied().fold(0.0, f64::max)
     );
+    // A note farther off than ON_BEAT_MS is set aside as the host's when it stands alone: the
+    // robot's notes on either side of it on the beat, one such note a robot at most, and less
+    // than STALL_MS off. This machine is a virtual one whose CPUs stall now and then: an idle
+    // SCHED_FIFO thread sleeping 1 ms woke 2.9 ms late within 30 s, and 2 runs in some 20 had
+    // one note 6-8 ms late (where saved, its neighbours within 0.11 ms). Link's phase, what is
+    // tested here, moves every note after it, not one.
+    let stalls: Vec<Onset> = (0..4)
+        .flat_map(|r| {
+            let notes: Vec<Onset> = by(r).into_iter().filter(|o| settled(&o)).collect();
+            lone_late(&notes)
+        })
+        .collect();
+    for r in 0..4 {
+        let of_r: Vec<&Onset> = stalls.iter().filter(|o| o.robot == r).collect();
+        assert!(of_r.len() <= 1, "robot {r}: {of_r:?}");
+    }
+    for o in &stalls {
+        assert!(o.off_ms().abs() < STALL_MS, "{o:?}");
+        eprintln!(
+            "set aside as the host's stall: {o:?}, {:.2} ms off",
+            o.off_ms()
+        );
+    }
+    let is_stall = |o: &Onset| {
+        stalls
+            .iter()
+            .any(|s| s.robot == o.robot && s.host_us == o.host_us)
+    };
     let mut offs: Vec<f64> = all
         .iter()
         .filter(settled)
+        .filter(|o| !is_stall(o))
         .map(|o| o.off_ms().abs())
         .collect();
     offs.sort_by(f64::total_cmp);
     assert!(offs.len() > 4 * 20, "{} notes", offs.len());
     let worst = offs[offs.len() - 1];
-    assert!(worst < ON_BEAT_MS, "a note {worst:.2} ms off its beat");
+    // Which note, and when, against the piece's events (ms; negative: before).
+    let at = |o: &Onset| {
+        let ms = |t: f64| (o.host_us - t) / 1e3;
+        format!(
+            "{o:?}: {:.0} ms from the start, {:.0} from the tempo change, {:.0} from the \
+             newcomer's start, {:.0} from the leave, {:.0} from the stop",
+            ms(started[0]),
+            ms(changed[0]),
+            ms(joined_at),
+            ms(left_at),
+            ms(stop_us)
+        )
+    };
+    let worst_at = all
+        .iter()
+        .filter(settled)
+        .filter(|o| !is_stall(o))
+        .max_by(|a, b| a.off_ms().abs().total_cmp(&b.off_ms().abs()))
+        .map(at);
+    assert!(
+        worst < ON_BEAT_MS,
+        "a note {worst:.2} ms off its beat: {worst_at:?}"
+    );
 
     // Bar one: the first bar line at least a beat after the start, the same for the three
     // (and for the newcomer, below, that reads the start after the tempo change).
