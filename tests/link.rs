@@ -43,6 +43,8 @@ const CHANGE_US: f64 = 1e6;
 /// The most a lone note may arrive off its beat through a stall of the host, ms: see the
 /// first test.
 const STALL_MS: f64 = 20.0;
+/// The most the arm64 robot's sends may be late under qemu, by its own clock, ms: see its test.
+const QEMU_LATE_MS: f64 = 50.0;
 
 fn ip(args: &[&str]) {
     let out = Command::new("ip")
@@ -811,11 +813,12 @@ fn an_arm64_robot_plays_in_phase_under_qemu() {
     // Under qemu the arm64 robot takes longer to start listening: time to join.
     std::thread::sleep(Duration::from_secs(2));
     let started = peer.ask("start");
-    for (name, robot) in [("this machine's", host), ("the arm64", pi)] {
+    let outs = [("this machine's", host), ("the arm64", pi)].map(|(name, robot)| {
         let out = exited(robot, Duration::from_secs(30));
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(out.status.success(), "{name} robot: {err}");
-    }
+        out
+    });
     let all = onsets(&peer.report());
     let by = |r: usize| of_robot(&all, r);
     let (host, pi) = (by(0), by(1));
@@ -844,15 +847,28 @@ fn an_arm64_robot_plays_in_phase_under_qemu() {
         spreads[spreads.len() - 1],
         spreads.len()
     );
-    // Every note on its beat, but the arm64 robot's first: qemu translates the code that
-    // sends a note the first time it runs it. In five runs the first came 3.3–10.4 ms late,
-    // the others 0.3–2.1 ms (qemu emulating an unoptimised build, slower on a busy machine;
-    // this machine's own build is 0.1 ms late). The first is held to its beat (above) and to
-    // 25 ms.
-    for o in host.iter().chain(&pi[1..]) {
+    // This machine's notes on their beat. The arm64 robot's lateness is qemu's as much as its
+    // own: qemu translates the code that sends a note the first time it runs it (the first
+    // note came 3.3-10.4 ms late in five runs), and an emulated unoptimised build on a busy
+    // machine sends late now and then (a CI run had one note 29 ms late, its neighbours within
+    // 1.7 ms). So its notes are held to the beat plus the most its sends were late by its own
+    // clock (`lateness_ms` in its report: qemu's delay is in it, Link's phase is not); a phase
+    // error, which moves every note, is held by the median.
+    for o in &host {
         assert!(o.off_ms().abs() < ON_BEAT_MS, "{o:?}");
     }
-    assert!(pi[0].off_ms().abs() < 25.0, "{:?}", pi[0]);
+    let report: Value =
+        serde_json::from_slice(&outs[1].stdout).expect("the arm64 robot's --json report");
+    let late = &report["lateness_ms"];
+    let late_max = late["max"].as_f64().expect("a real-time report's lateness");
+    eprintln!("arm64 (qemu): its sends late by its own clock, ms: {late}");
+    assert!(late_max < QEMU_LATE_MS, "{late}");
+    for o in &pi {
+        assert!(o.off_ms().abs() < ON_BEAT_MS + late_max, "{o:?}, {late}");
+    }
+    let mut pi_offs: Vec<f64> = pi.iter().map(|o| o.off_ms().abs()).collect();
+    pi_offs.sort_by(f64::total_cmp);
+    assert!(percentile(&pi_offs, 0.5) < ON_BEAT_MS, "{offs:?}");
     let _ = std::fs::remove_file(file);
 }
 

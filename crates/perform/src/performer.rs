@@ -62,7 +62,8 @@ where
         }
     }
 
-    /// Paces the sends by `clock` (a real clock plays in real time).
+    /// Paces the sends by `clock` (a real clock plays in real time), and measures each send's
+    /// lateness on it ([`Played::lateness_us`]).
     pub fn clock(mut self, clock: &'a mut dyn Clock) -> Self {
         self.clock = Some(clock);
         self
@@ -84,8 +85,7 @@ where
     }
 
     /// Calls `live` with where the performance stands, at least every 40 ms (or as
-    /// [`Control::poll_every`] says), and measures each send's lateness on the clock
-    /// ([`Played::lateness_us`]).
+    /// [`Control::poll_every`] says).
     pub fn live(mut self, live: &'a mut dyn FnMut(&Live)) -> Self {
         self.live = Some(live);
         self

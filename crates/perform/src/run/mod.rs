@@ -44,7 +44,7 @@ pub(crate) struct Run<'a, S: Iterator<Item = ScoreEvent>> {
     start: WallTime,
     /// How often a live view is called, µs.
     every: u64,
-    /// Each send's lateness on the clock, µs (with a live view).
+    /// Each send's lateness on the clock, µs (when a clock paces the run).
     lateness: Option<Vec<u64>>,
     notes_sent: u64,
     stopped_at: Option<WallTime>,
@@ -142,6 +142,7 @@ impl<'a, S: Iterator<Item = ScoreEvent> + Clone> Run<'a, S> {
         }
         Ok(Self {
             setup,
+            lateness: p.clock.is_some().then(Vec::new),
             clock: p.clock,
             virtual_clock: VirtualClock::new(),
             control: p.control,
@@ -153,7 +154,6 @@ impl<'a, S: Iterator<Item = ScoreEvent> + Clone> Run<'a, S> {
             out: Out::new(p.midi),
             start,
             every: p.control.map_or(SHOW_EVERY_US, Control::poll_us),
-            lateness: p.live.is_some().then(Vec::new),
             live: p.live,
             notes_sent: 0,
             stopped_at: None,
