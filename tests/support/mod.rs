@@ -61,8 +61,9 @@ pub fn note_on_arrivals(
 ) {
     let mut buf = [0u8; 2048];
     let (mut status, mut data) = (0u8, Vec::new());
-    while let Ok(n) = socket.recv(&mut buf) {
-        let at = std::time::Instant::now();
+    // Each datagram's arrival in the kernel: not late when this thread is.
+    orch_io::arrival::stamp_arrivals(&socket).unwrap();
+    while let Ok((n, at)) = orch_io::arrival::recv(&socket, &mut buf) {
         for &b in &buf[..n] {
             match b {
                 0xF8..=0xFF => {}

@@ -221,11 +221,13 @@ enum Source {
 }
 
 impl Source {
-    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
-        match self {
+    /// Reads what is there: its length and when it came (a datagram's arrival in the kernel,
+    /// else the read's time).
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<(usize, Instant)> {
+        let n = match self {
             Source::Serial(p) => p.read(buf),
             Source::File(f) => f.read(buf),
-            Source::Udp(s) => s.recv(buf),
+            Source::Udp(s) => return crate::arrival::recv(s, buf),
             Source::Stdin(s) => s.lock().read(buf),
             Source::Closed => Err(io::Error::from(io::ErrorKind::NotConnected)),
             #[cfg(feature = "alsa")]
@@ -244,7 +246,8 @@ impl Source {
                 }
                 Ok(n)
             }
-        }
+        }?;
+        Ok((n, Instant::now()))
     }
 }
 
@@ -364,6 +367,7 @@ fn open_source(target: &InTarget) -> Result<(String, Source, Option<SocketAddr>)
             socket
                 .set_read_timeout(Some(READ_POLL))
                 .map_err(|e| open_err(&device, e))?;
+            crate::arrival::stamp_arrivals(&socket).map_err(|e| open_err(&device, e))?;
             let local = socket.local_addr().ok();
             (device, Source::Udp(socket), local)
         }
@@ -417,10 +421,10 @@ fn read_loop<T: From<InEvent>>(
     let mut buf = [0u8; READ_SIZE];
     while !stop.load(Ordering::SeqCst) {
         let event = match source.read(&mut buf) {
-            Ok(0) if matches!(source, Source::Udp(_)) => continue,
-            Ok(0) => InEvent::End,
-            Ok(n) => InEvent::Bytes {
-                at: Instant::now(),
+            Ok((0, _)) if matches!(source, Source::Udp(_)) => continue,
+            Ok((0, _)) => InEvent::End,
+            Ok((n, at)) => InEvent::Bytes {
+                at,
                 bytes: buf[..n].to_vec(),
             },
             Err(e)

@@ -12,7 +12,7 @@
 //!   around and re-initialised when they answer again ([`ResilientBoards`]).
 //! - MIDI inputs for `orch run --in` ([`input`]): a UART at 31 250 baud, a raw MIDI device
 //!   or file, UDP datagrams, an RTP-MIDI session, standard input; each read stamped with the
-//!   host's monotonic clock.
+//!   host's monotonic clock (a UDP datagram with the kernel's arrival time: [`arrival`]).
 //! - RTP-MIDI with AppleMIDI sessions ([`rtp`]), in (`--in rtpmidi:PORT`) and out
 //!   (`--out rtpmidi:HOST:PORT`), with the recovery journal's chapters N and C.
 //! - `--out` specifications ([`spec`]): `serial:/dev/ttyUSB0`, `udp:HOST:PORT:ch=2`, …
@@ -42,6 +42,7 @@
 
 #[cfg(feature = "alsa")]
 pub mod alsa_seq;
+pub mod arrival;
 pub mod boards;
 pub mod input;
 pub mod midi;

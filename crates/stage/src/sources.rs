@@ -89,7 +89,12 @@ pub struct Stamp(pub Instant);
 impl Stamp {
     /// µs since the origin.
     pub fn now_us(self) -> u64 {
-        u64::try_from(self.0.elapsed().as_micros()).unwrap_or(u64::MAX)
+        self.at_us(Instant::now())
+    }
+
+    /// µs from the origin to `at` (0 before it).
+    pub fn at_us(self, at: Instant) -> u64 {
+        u64::try_from(at.saturating_duration_since(self.0).as_micros()).unwrap_or(u64::MAX)
     }
 }
 
@@ -124,7 +129,8 @@ impl<R: Read> TempoSource for ClockBytes<R> {
     }
 }
 
-/// UDP datagrams, each stamped when it arrives: MIDI clock bytes or OSC packets.
+/// UDP datagrams, each stamped when it arrived (the kernel's time: [`orch_io::arrival`]):
+/// MIDI clock bytes or OSC packets.
 struct Datagrams {
     socket: UdpSocket,
     kind: Datagram,
@@ -144,8 +150,8 @@ impl TempoSource for Datagrams {
             if let Some(c) = self.pending.pop_front() {
                 return Ok(Some(c));
             }
-            let n = self.socket.recv(&mut buf)?;
-            let t_us = self.stamp.now_us();
+            let (n, arrived) = orch_io::arrival::recv(&self.socket, &mut buf)?;
+            let t_us = self.stamp.at_us(arrived);
             match &mut self.kind {
                 Datagram::Clock(d) => {
                     for &b in &buf[..n] {
@@ -434,6 +440,8 @@ pub fn open_source(
         SourceSpec::MidiClock(ClockIn::Udp(addr)) | SourceSpec::Osc(addr) => {
             let socket = UdpSocket::bind(addr)
                 .map_err(|e| SourceError::BadInput(format!("cannot listen on UDP {addr}: {e}")))?;
+            orch_io::arrival::stamp_arrivals(&socket)
+                .map_err(|e| SourceError::BadInput(format!("UDP {addr}: {e}")))?;
             let kind = match spec {
                 SourceSpec::Osc(_) => Datagram::Osc(OscCues::new()),
                 _ => Datagram::Clock(MidiClock::new()),
