@@ -10,12 +10,12 @@ use crate::played::Played;
 /// One note of the account (`orch play --notes`, `orch analyze --notes`), as one JSON object:
 ///
 /// `{"t_ms":T,"bar":B,"beat":X,"note":N,"channel":C,"velocity":V,"key":K,"outcome":O,
-/// "reason":R,"sent_ms":S,"sounded_ms":H,"onset_ms":E,"sounded_velocity":W}`
+/// "reason":R,"sent_ms":S,"sent_late_ms":L,"sounded_ms":H,"onset_ms":E,"sounded_velocity":W}`
 ///
 /// Times are ms from the start of the performance (score time 0). `reason` is there only for
-/// a dropped note; `sent_ms`, `sounded_ms`, `onset_ms` and `sounded_velocity` are `null` where
-/// there is none (a note never sent; a note with no strike of its own: joined, unison,
-/// dropped, skipped).
+/// a dropped note, `sent_late_ms` only for a note sent in real time; `sent_ms`, `sounded_ms`,
+/// `onset_ms` and `sounded_velocity` are `null` where there is none (a note never sent; a note
+/// with no strike of its own: joined, unison, dropped, skipped).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct NoteLine {
     /// When the score wants it to sound, ms.
@@ -44,6 +44,10 @@ pub struct NoteLine {
     pub reason: Option<&'static str>,
     /// When its Note-On was sent, ms.
     pub sent_ms: Option<f64>,
+    /// How much later than `sent_ms` its Note-On left by the real clock, ms (the host's
+    /// delay: a thread woken late, a busy CPU, an emulator); real-time play only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sent_late_ms: Option<f64>,
     /// When its own strike sounded, ms.
     pub sounded_ms: Option<f64>,
     /// Sounded − score, ms (positive: late).
@@ -86,7 +90,7 @@ impl Played {
             .records
             .iter()
             .enumerate()
-            .map(|(i, r)| (r.score_at_us, i, self.line(r, start, &bar_beat)))
+            .map(|(i, r)| (r.score_at_us, i, self.line(i, r, start, &bar_beat)))
             .collect();
         // Score order: by time, and in the file's order at the same time (a record's index is
         // its note's place among the Note-Ons).
@@ -94,7 +98,13 @@ impl Played {
         lines.into_iter().map(|(_, i, l)| (i, l)).collect()
     }
 
-    fn line(&self, r: &NoteRecord, start: i64, bar_beat: &impl Fn(f64) -> (u32, u32)) -> NoteLine {
+    fn line(
+        &self,
+        i: usize,
+        r: &NoteRecord,
+        start: i64,
+        bar_beat: &impl Fn(f64) -> (u32, u32),
+    ) -> NoteLine {
         let t_ms = ms(r.score_at_us - start);
         let (bar, beat) = bar_beat(t_ms.max(0.0));
         let (outcome, reason) = words(r.outcome);
@@ -115,6 +125,11 @@ impl Played {
             outcome,
             reason,
             sent_ms: r.sent_us().map(|t| ms(t as i64 - start)),
+            sent_late_ms: self
+                .note_lateness_us
+                .as_ref()
+                .and_then(|l| l.get(i).copied().flatten())
+                .map(|us| ms(i64::from(us))),
             sounded_ms: onset_us.map(|e| ms(r.score_at_us + e - start)),
             onset_ms: onset_us.map(ms),
             sounded_velocity: onset_us.and(r.sounded_velocity),

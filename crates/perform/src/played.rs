@@ -25,6 +25,10 @@ pub struct Played {
     pub plan: PlanStats,
     /// Real-clock lateness of each message sent, µs (real-time play only).
     pub lateness_us: Option<Vec<u64>>,
+    /// Real-clock lateness of each record's Note-On, µs, indexed as [`records`](Self::records)
+    /// (real-time play only; `None` for a note not sent). The same sends as
+    /// [`lateness_us`](Self::lateness_us), tied to their notes.
+    pub note_lateness_us: Option<Vec<Option<u32>>>,
     /// When the song started (score time 0), wall µs.
     pub start_us: u64,
     /// When the robot had finished, wall µs.

@@ -59,6 +59,11 @@ impl<S: Iterator<Item = ScoreEvent> + Clone> Run<'_, S> {
             performance,
             stats: *interp.stats(),
             plan: self.planner.stats(),
+            note_lateness_us: self.lateness.is_some().then(|| {
+                let mut l = self.note_lateness;
+                l.resize(total, None);
+                l
+            }),
             lateness_us: self.lateness,
             start_us: self.start.as_micros(),
             end_us: end,

@@ -46,6 +46,8 @@ pub(crate) struct Run<'a, S: Iterator<Item = ScoreEvent>> {
     every: u64,
     /// Each send's lateness on the clock, µs (when a clock paces the run).
     lateness: Option<Vec<u64>>,
+    /// Each note's Note-On's among them, by its record's index.
+    note_lateness: Vec<Option<u32>>,
     notes_sent: u64,
     stopped_at: Option<WallTime>,
     line: Line,
@@ -143,6 +145,7 @@ impl<'a, S: Iterator<Item = ScoreEvent> + Clone> Run<'a, S> {
         Ok(Self {
             setup,
             lateness: p.clock.is_some().then(Vec::new),
+            note_lateness: Vec::new(),
             clock: p.clock,
             virtual_clock: VirtualClock::new(),
             control: p.control,

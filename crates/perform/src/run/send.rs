@@ -151,6 +151,13 @@ impl<S: Iterator<Item = ScoreEvent> + Clone> Run<'_, S> {
             if let Some(l) = self.lateness.as_mut() {
                 l.push(late);
             }
+            if let Some(id) = note.filter(|_| bytes.note_on().is_some()) {
+                let i = id as usize;
+                if self.note_lateness.len() <= i {
+                    self.note_lateness.resize(i + 1, None);
+                }
+                self.note_lateness[i] = Some(u32::try_from(late).unwrap_or(u32::MAX));
+            }
         }
         self.line.last_at = t;
         self.line.last_byte = Some(t);
