@@ -43,8 +43,13 @@ const CHANGE_US: f64 = 1e6;
 /// The most a lone note may arrive off its beat through a stall of the host, ms: see the
 /// first test.
 const STALL_MS: f64 = 20.0;
-/// The most the arm64 robot's sends may be late under qemu, by its own clock, ms: see its test.
+/// The most the arm64 robot's Note-Ons may leave late under qemu, by its own clock, ms: see its
+/// test.
 const QEMU_LATE_MS: f64 = 50.0;
+/// The most the arm64 robot's phase may be off the session's under qemu, ms: Link measures the
+/// session's clock through the emulator, whose delays skew the measurement (0.5 ms on a quiet
+/// machine, 2.9 ms while it compiled on both cores).
+const QEMU_PHASE_MS: f64 = 6.0;
 
 fn ip(args: &[&str]) {
     let out = Command::new("ip")
@@ -355,6 +360,19 @@ fn onsets(report: &[Value]) -> Vec<Onset> {
             })
         })
         .collect()
+}
+
+/// How late each Note-On a robot sent left by its own clock, ms, in the order sent: from its
+/// note-by-note account (`--notes`).
+fn sent_late_ms(account: &std::path::Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(account).expect("the robot's --notes account");
+    let mut sent: Vec<(f64, f64)> = text
+        .lines()
+        .map(|l| serde_json::from_str::<Value>(l).unwrap())
+        .filter_map(|v| Some((v["sent_ms"].as_f64()?, v["sent_late_ms"].as_f64()?)))
+        .collect();
+    sent.sort_by(|a, b| a.0.total_cmp(&b.0));
+    sent.into_iter().map(|(_, late)| late).collect()
 }
 
 /// Robot `r`'s onsets, in order.
@@ -806,19 +824,20 @@ fn an_arm64_robot_plays_in_phase_under_qemu() {
     let mut peer = Peer::start(&net, 0, 2);
     std::thread::sleep(Duration::from_millis(1_500));
     let host = robot(&net, 1, file, 9001);
-    let mut args = robot_args(&net, file, 9002, &[]);
+    let account = testkit::in_test("arm64-notes.jsonl");
+    let notes = account.to_str().unwrap();
+    let mut args = robot_args(&net, file, 9002, &["--notes", notes]);
     args.push("--no-compensation".into());
     let pi = spawn(args, |args| net.command(2, &arm64, args));
     peer.wait_peers(2);
     // Under qemu the arm64 robot takes longer to start listening: time to join.
     std::thread::sleep(Duration::from_secs(2));
     let started = peer.ask("start");
-    let outs = [("this machine's", host), ("the arm64", pi)].map(|(name, robot)| {
+    for (name, robot) in [("this machine's", host), ("the arm64", pi)] {
         let out = exited(robot, Duration::from_secs(30));
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(out.status.success(), "{name} robot: {err}");
-        out
-    });
+    }
     let all = onsets(&peer.report());
     let by = |r: usize| of_robot(&all, r);
     let (host, pi) = (by(0), by(1));
@@ -847,28 +866,37 @@ fn an_arm64_robot_plays_in_phase_under_qemu() {
         spreads[spreads.len() - 1],
         spreads.len()
     );
-    // This machine's notes on their beat. The arm64 robot's lateness is qemu's as much as its
-    // own: qemu translates the code that sends a note the first time it runs it (the first
-    // note came 3.3-10.4 ms late in five runs), and an emulated unoptimised build on a busy
-    // machine sends late now and then (a CI run had one note 29 ms late, its neighbours within
-    // 1.7 ms). So its notes are held to the beat plus the most its sends were late by its own
-    // clock (`lateness_ms` in its report: qemu's delay is in it, Link's phase is not); a phase
-    // error, which moves every note, is held by the median.
+    // This machine's notes on their beat. The arm64 robot's are judged in two parts. First,
+    // how late each Note-On left by its own clock (`sent_late_ms` in its account), held to
+    // QEMU_LATE_MS: qemu translates the code that sends a note the first time it runs it (the
+    // first note's 6-10 ms), and an emulated unoptimised build on a busy machine sends late now
+    // and then (a CI run had one note 29 ms late, its neighbours within 1.7 ms). The rest is
+    // where the robot put the beat: its median is its phase against the session, held to
+    // QEMU_PHASE_MS, and each note is held to ON_BEAT_MS of it.
     for o in &host {
         assert!(o.off_ms().abs() < ON_BEAT_MS, "{o:?}");
     }
-    let report: Value =
-        serde_json::from_slice(&outs[1].stdout).expect("the arm64 robot's --json report");
-    let late = &report["lateness_ms"];
-    let late_max = late["max"].as_f64().expect("a real-time report's lateness");
-    eprintln!("arm64 (qemu): its sends late by its own clock, ms: {late}");
-    assert!(late_max < QEMU_LATE_MS, "{late}");
-    for o in &pi {
-        assert!(o.off_ms().abs() < ON_BEAT_MS + late_max, "{o:?}, {late}");
+    let late = sent_late_ms(&account);
+    assert_eq!(late.len(), pi.len(), "{late:?}");
+    let shown: Vec<String> = late.iter().map(|l| format!("{l:.2}")).collect();
+    eprintln!(
+        "arm64 (qemu): each Note-On sent late by its own clock, ms: {}",
+        shown.join(" ")
+    );
+    let rest: Vec<f64> = pi.iter().zip(&late).map(|(o, l)| o.off_ms() - l).collect();
+    let mut sorted = rest.clone();
+    sorted.sort_by(f64::total_cmp);
+    let phase = percentile(&sorted, 0.5);
+    eprintln!("arm64 (qemu): its phase against the session {phase:.2} ms");
+    assert!(phase.abs() < QEMU_PHASE_MS, "{rest:?}");
+    for ((o, late), rest) in pi.iter().zip(&late).zip(&rest) {
+        assert!(*late < QEMU_LATE_MS, "{o:?} sent {late} ms late");
+        assert!(
+            (rest - phase).abs() < ON_BEAT_MS,
+            "{o:?} sent {late} ms late; phase {phase}"
+        );
     }
-    let mut pi_offs: Vec<f64> = pi.iter().map(|o| o.off_ms().abs()).collect();
-    pi_offs.sort_by(f64::total_cmp);
-    assert!(percentile(&pi_offs, 0.5) < ON_BEAT_MS, "{offs:?}");
+    let _ = std::fs::remove_file(account);
     let _ = std::fs::remove_file(file);
 }
 

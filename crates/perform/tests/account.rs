@@ -97,6 +97,9 @@ fn a_note_sent_late_by_the_clock_says_how_late_and_the_others_none() {
     let each = played.lateness_us.as_ref().unwrap();
     assert_eq!(each.iter().filter(|&&l| l > 0).count(), 1, "{each:?}");
     // On the virtual clock (no clock asked for), nothing is measured.
-    assert!(fast.account(bar_beat).iter().all(|l| l.sent_late_ms.is_none()));
+    assert!(fast
+        .account(bar_beat)
+        .iter()
+        .all(|l| l.sent_late_ms.is_none()));
     assert!(fast.lateness_us.is_none());
 }

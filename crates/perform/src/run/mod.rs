@@ -57,6 +57,15 @@ pub(crate) struct Run<'a, S: Iterator<Item = ScoreEvent>> {
     seen_jump: u64,
 }
 
+/// Now on `clock`, or else on `virtual_clock` (apart from the rest of a run, so that it can be
+/// read while the run's output is borrowed).
+fn now_on(clock: &Option<&mut dyn Clock>, virtual_clock: &VirtualClock) -> WallTime {
+    WallTime::from_micros(match clock {
+        Some(c) => c.now_us(),
+        None => virtual_clock.now_us(),
+    })
+}
+
 /// What was last sent, and when.
 struct Line {
     /// The last send's time (nothing is sent before it).
@@ -267,10 +276,7 @@ impl<'a, S: Iterator<Item = ScoreEvent> + Clone> Run<'a, S> {
 
     /// Now, on the clock.
     fn now(&self) -> WallTime {
-        WallTime::from_micros(match &self.clock {
-            Some(c) => c.now_us(),
-            None => self.virtual_clock.now_us(),
-        })
+        now_on(&self.clock, &self.virtual_clock)
     }
 
     /// The control's rings so far (0 without a control).

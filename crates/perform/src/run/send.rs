@@ -145,9 +145,9 @@ impl<S: Iterator<Item = ScoreEvent> + Clone> Run<'_, S> {
             ahead.push((id, score_at_us));
         }
         let t = next.max(self.line.last_at);
-        self.deliver(t, bytes, note)?;
+        let left = self.deliver(t, bytes, note)?;
         if self.lateness.is_some() {
-            let late = self.now().saturating_since(t);
+            let late = left.saturating_since(t);
             if let Some(l) = self.lateness.as_mut() {
                 l.push(late);
             }
@@ -184,22 +184,28 @@ impl<S: Iterator<Item = ScoreEvent> + Clone> Run<'_, S> {
         Ok(())
     }
 
-    /// Hands one message to the robot side at `t`.
+    /// Hands one message to the robot side at `t`. Returns when the bytes left, on the clock
+    /// (before the virtual robot takes them).
     pub(super) fn deliver(
         &mut self,
         t: WallTime,
         bytes: &[u8],
         note: Option<NoteId>,
-    ) -> Result<(), PerformError> {
+    ) -> Result<WallTime, PerformError> {
         if let Some(id) = note {
             self.ledger.delivered(id, t.as_micros());
         }
         let link = self.setup.link;
-        match &mut self.out {
-            Out::Virtual => self.robot.feed(t.as_micros(), bytes).map_err(robot_err)?,
+        let left = match &mut self.out {
+            Out::Virtual => {
+                let left = super::now_on(&self.clock, &self.virtual_clock);
+                self.robot.feed(t.as_micros(), bytes).map_err(robot_err)?;
+                left
+            }
             Out::Midi { out, wire, status } => {
                 let sent = status.compress(bytes);
                 out.send(t, sent)?;
+                let left = super::now_on(&self.clock, &self.virtual_clock);
                 let t = t.as_micros();
                 for &b in sent {
                     let at = match link {
@@ -208,10 +214,11 @@ impl<S: Iterator<Item = ScoreEvent> + Clone> Run<'_, S> {
                     };
                     self.robot.feed(at, &[b]).map_err(robot_err)?;
                 }
+                left
             }
-        }
+        };
         self.account_robot();
-        Ok(())
+        Ok(left)
     }
 }
 
