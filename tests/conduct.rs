@@ -401,10 +401,11 @@ fn osc_beats_over_loopback_changing_from_100_to_130_bpm_are_followed_within_25_m
         .collect();
     println!("OSC beats over loopback, 100 -> 130 BPM: note - beat, ms: {e:.1?}");
     // 25 ms is orch's. This machine is a virtual one whose CPUs stall now and then (two full
-    // runs of the tests had one note 25.8 and 27.6 ms off), so a note is also given what the host measurably
-    // took around it: how late this thread sent its beat and the one before (a late beat
-    // makes its note early, and the follower's answer to it the next one late) and the most
-    // orch's own sends were late by its clock (its report's lateness). Printed when used.
+    // runs of the tests had one note 25.8 and 27.6 ms off), so a note is also given what the
+    // host measurably took around it: how late this thread sent its beat and the one before
+    // (a late beat makes its note early, and the follower's answer to it the next one late)
+    // and the most orch's own sends were late by its clock (its report's lateness). Printed
+    // when used.
     println!(
         "beats sent late by {:.2} ms at most; orch's sends by {orch_late:.2} ms",
         beat_late.iter().copied().fold(0.0, f64::max)
