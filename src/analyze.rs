@@ -31,8 +31,15 @@ pub fn run(args: &AnalyzeArgs) -> anyhow::Result<()> {
             .with_context(|| format!("--svg {}", path.display()))?;
     }
     if let (Some(mut file), Some(path)) = (create(&args.notes, "--notes")?, &args.notes) {
-        orch_stage::account::write_account(&mut file, &song, &played, setup.tempo, None)
-            .with_context(|| format!("--notes {}", path.display()))?;
+        orch_stage::account::write_account(
+            &mut file,
+            &song,
+            &played,
+            orch_io::Channels::ALL,
+            setup.tempo,
+            None,
+        )
+        .with_context(|| format!("--notes {}", path.display()))?;
     }
     let mut out = std::io::stdout().lock();
     if args.json {

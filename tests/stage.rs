@@ -179,7 +179,15 @@ fn an_analysis_through_the_library_gives_orch_analyzes() {
     let (analysis, played) = analyze(&song, &robot, &setup).unwrap();
     assert!(!analysis.went_wrong.is_empty() && analysis.findings.len() > 2);
     let mut account = Vec::new();
-    account::write_account(&mut account, &song, &played, setup.tempo, None).unwrap();
+    account::write_account(
+        &mut account,
+        &song,
+        &played,
+        orch_io::Channels::ALL,
+        setup.tempo,
+        None,
+    )
+    .unwrap();
 
     let path = file.display().to_string();
     let notes = testkit::in_test("notes.jsonl");

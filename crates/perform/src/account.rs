@@ -72,9 +72,9 @@ fn ms(us: i64) -> f64 {
 impl Played {
     /// The account: one line for every record (every score note, and every note played again
     /// after a jump back), in score order. `bar_beat` gives a note's bar and beat from its
-    /// time in ms from the start of the performance (the front end knows the song and the
-    /// tempo it was played at).
-    pub fn account(&self, bar_beat: impl Fn(f64) -> (u32, u32)) -> Vec<NoteLine> {
+    /// record's index in [`records`](Self::records) and its time in ms from the start of the
+    /// performance (the front end knows the song, its notes and the tempo it was played at).
+    pub fn account(&self, bar_beat: impl Fn(usize, f64) -> (u32, u32)) -> Vec<NoteLine> {
         self.account_indexed(bar_beat)
             .into_iter()
             .map(|(_, l)| l)
@@ -84,7 +84,10 @@ impl Played {
     /// The [`account`](Self::account), each line with the index of its record in
     /// [`records`](Self::records) (for a score's note, its place among the song's Note-Ons:
     /// what ties a line to its note's Note-Off, for a piano roll).
-    pub fn account_indexed(&self, bar_beat: impl Fn(f64) -> (u32, u32)) -> Vec<(usize, NoteLine)> {
+    pub fn account_indexed(
+        &self,
+        bar_beat: impl Fn(usize, f64) -> (u32, u32),
+    ) -> Vec<(usize, NoteLine)> {
         let start = self.start_us as i64;
         let mut lines: Vec<(i64, usize, NoteLine)> = self
             .records
@@ -103,10 +106,10 @@ impl Played {
         i: usize,
         r: &NoteRecord,
         start: i64,
-        bar_beat: &impl Fn(f64) -> (u32, u32),
+        bar_beat: &impl Fn(usize, f64) -> (u32, u32),
     ) -> NoteLine {
         let t_ms = ms(r.score_at_us - start);
-        let (bar, beat) = bar_beat(t_ms.max(0.0));
+        let (bar, beat) = bar_beat(i, t_ms.max(0.0));
         let (outcome, reason) = words(r.outcome);
         let onset_us = match r.outcome {
             Outcome::OnTime { error_us } => Some(i64::from(error_us)),

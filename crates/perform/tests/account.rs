@@ -15,7 +15,7 @@ fn account_indexed_ties_each_line_to_its_record_and_note_span() {
             song_events(&song),
             song.notes(),
         );
-        let bar_beat = |t_ms: f64| song.bar_beat((t_ms * 1000.0).round() as u64);
+        let bar_beat = |_: usize, t_ms: f64| song.bar_beat((t_ms * 1000.0).round() as u64);
         let indexed = played.account_indexed(bar_beat);
         let plain = played.account(bar_beat);
         assert_eq!(
@@ -86,7 +86,7 @@ fn a_note_sent_late_by_the_clock_says_how_late_and_the_others_none() {
         .clock(&mut clock)
         .run()
         .unwrap();
-    let bar_beat = |t_ms: f64| song.bar_beat((t_ms * 1000.0).round() as u64);
+    let bar_beat = |_: usize, t_ms: f64| song.bar_beat((t_ms * 1000.0).round() as u64);
     let late: Vec<f64> = played
         .account(bar_beat)
         .iter()

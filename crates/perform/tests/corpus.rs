@@ -89,7 +89,7 @@ fn every_corpus_file_on_pwm_boards_adds_up_and_sounds_at_its_velocity() {
             medians.push(r.onset_ms.median);
         }
         // The note-by-note account says the same, note by note.
-        let account = played.account(|_| (1, 1));
+        let account = played.account(|_, _| (1, 1));
         assert_eq!(account.len() as u64, r.notes, "{file}");
         let count = |name: &str| account.iter().filter(|l| l.outcome == name).count() as u64;
         let o = r.outcomes;

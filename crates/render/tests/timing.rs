@@ -71,7 +71,7 @@ fn render_keys(
 /// The sample each sounded note's strike should begin on, by the account, in score order.
 fn sounded_samples(played: &Played) -> Vec<i64> {
     played
-        .account(|_| (1, 1))
+        .account(|_, _| (1, 1))
         .iter()
         .filter_map(|n| n.sounded_ms)
         .map(|ms| (ms * f64::from(RATE) / 1000.0).round() as i64)
@@ -210,7 +210,7 @@ fn a_late_restrike_sounds_late_by_the_accounts_lateness() {
         (1500, 64, 100, 100),
     ]);
     let played = play(&song, orch_perform::thesis_config());
-    let lines = played.account(|_| (1, 1));
+    let lines = played.account(|_, _| (1, 1));
     assert_eq!(
         lines.iter().map(|l| l.outcome).collect::<Vec<_>>(),
         ["on_time", "late", "on_time"]

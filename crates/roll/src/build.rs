@@ -180,8 +180,8 @@ pub fn roll_on(
         return Err(BuildError::NotTheSong);
     }
     let keyups = KeyUps::of(played);
-    let lines =
-        played.account_indexed(|t_ms| song.bar_beat((t_ms * 1000.0 * tempo).round() as u64));
+    // Record i is the song's note i (checked above): its bar is its own.
+    let lines = played.account_indexed(|i, _| song.bar_beat(spans[i].on_us));
     let mut notes = Vec::with_capacity(lines.len());
     let mut end_ms = wall_ms(song.duration_us());
     for (i, line) in lines {

@@ -97,7 +97,7 @@ fn note_elements_by_outcome_equal_the_accounts_counts() {
         *drawn.entry(outcome).or_default() += 1;
     }
     let mut account: BTreeMap<String, usize> = BTreeMap::new();
-    for line in played.account(|_| (1, 1)) {
+    for line in played.account(|_, _| (1, 1)) {
         *account.entry(line.outcome.to_string()).or_default() += 1;
     }
     assert_eq!(drawn, account);

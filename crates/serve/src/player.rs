@@ -22,6 +22,7 @@ use orch_io::OutSpec;
 use orch_perform::{Control, Setup, Tempo};
 use orch_robot::Robot;
 use orch_stage::bars::{last_bar, start_of};
+use orch_stage::places::Places;
 use orch_stage::session::{open_lanes, Session, Snapshot};
 use orch_stage::StageError;
 use serde::Deserialize;
@@ -545,9 +546,10 @@ impl Player {
             // Serialised line by line (`orch_stage::account::account`'s lines, without a JSON
             // tree of tens of thousands of objects on the way).
             let the_song = &song.analysis.song;
+            let places = Places::of(the_song, &e.played, e.spec.channels, tempo);
             let lines = e
                 .played
-                .account(|t_ms| the_song.bar_beat((t_ms * 1000.0 * tempo.get()).round() as u64));
+                .account(|i, t_ms| places.bar_beat(the_song, i, t_ms));
             let text = serde_json::to_string(&lines).unwrap_or_else(|_| "null".into());
             (Arc::<str>::from(text), e.played.start_us as f64 / 1e3)
         });

@@ -4,18 +4,27 @@
 
 use std::io::{self, Write};
 
+use orch_io::Channels;
 use orch_perform::{Played, Tempo};
 use orch_seq::Song;
 use serde_json::{json, Map, Value};
 
+use crate::places::Places;
 use crate::session::Ended;
 
-/// The note-by-note account of `played` (a performance of `song` at `tempo`), a JSON object
-/// a note in score order, with `"out"` first when `out` names the robot. Bars and beats are
-/// the song's own: the tempo factor it was played at is undone.
-pub fn account(song: &Song, played: &Played, tempo: Tempo, out: Option<&str>) -> Vec<Value> {
+/// The note-by-note account of `played` (a performance of `song`'s `channels` begun at
+/// `tempo`), a JSON object a note in score order, with `"out"` first when `out` names the
+/// robot. Bars and beats are the song's own, whatever the tempo did ([`Places`]).
+pub fn account(
+    song: &Song,
+    played: &Played,
+    channels: Channels,
+    tempo: Tempo,
+    out: Option<&str>,
+) -> Vec<Value> {
+    let places = Places::of(song, played, channels, tempo);
     played
-        .account(|t_ms| song.bar_beat((t_ms * 1000.0 * tempo.get()).round() as u64))
+        .account(|i, t_ms| places.bar_beat(song, i, t_ms))
         .into_iter()
         .map(|line| {
             let mut value = serde_json::to_value(&line).expect("an account line is JSON");
@@ -35,10 +44,11 @@ pub fn write_account(
     file: &mut impl Write,
     song: &Song,
     played: &Played,
+    channels: Channels,
     tempo: Tempo,
     out: Option<&str>,
 ) -> io::Result<()> {
-    for line in account(song, played, tempo, out) {
+    for line in account(song, played, channels, tempo, out) {
         writeln!(file, "{line}")?;
     }
     file.flush()
@@ -55,7 +65,7 @@ pub fn write_accounts(
     let several = ended.len() > 1;
     for e in ended {
         let out = several.then_some(e.spec.text.as_str());
-        write_account(file, song, &e.played, tempo, out)?;
+        write_account(file, song, &e.played, e.spec.channels, tempo, out)?;
     }
     Ok(())
 }

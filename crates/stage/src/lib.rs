@@ -99,6 +99,7 @@ pub mod interpret;
 pub mod live;
 pub mod load;
 pub mod messages;
+pub mod places;
 pub mod play;
 pub mod report;
 pub mod run;
