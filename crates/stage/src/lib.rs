@@ -73,7 +73,8 @@
 //! - [`analysis`]: whether a robot can play a song and what will go wrong, without playing
 //!   it live ([`analyze`] gives an [`Analysis`]: the report, the notes that will go wrong,
 //!   the [`findings`] in words; the piano roll as SVG).
-//! - [`account`]: the note-by-note account and the board writes, a JSON line each.
+//! - [`account`]: the note-by-note account and the board writes, a JSON line each; each
+//!   note's bar and beat its own whatever the tempo did ([`places`]).
 //!
 //! Errors ([`error`]) are [`StageError`] (a song, a bar, a tempo, a performance),
 //! [`SourceError`] (a tempo source: bad input, named, or the I/O failure behind it),
